@@ -1,0 +1,27 @@
+//! `echothigh bench ...`: benchmarks that print and write JSON reports.
+
+pub mod haptics;
+pub mod image;
+pub mod physics;
+
+use clap::Subcommand;
+
+/// Which benchmark to run.
+#[derive(Subcommand, Debug)]
+pub enum BenchCommand {
+    /// Implicit physics step versus mesh size (and contact, queries).
+    Physics(physics::Args),
+    /// Haptic tick and model-manager fit times; loop period error.
+    Haptics(haptics::Args),
+    /// Echographic frame rate.
+    Image(image::Args),
+}
+
+/// Runs the chosen benchmark.
+pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
+    match cmd {
+        BenchCommand::Physics(a) => physics::run(a),
+        BenchCommand::Haptics(a) => haptics::run(a),
+        BenchCommand::Image(a) => image::run(a),
+    }
+}

@@ -1,0 +1,4 @@
+//! Subcommands other than benchmarks.
+
+pub mod calibrate;
+pub mod image;

@@ -1,0 +1,145 @@
+//! The seam between the live simulation (the runtime, in-process threads) and
+//! its front ends (the web viewer). The runtime implements [`LiveControl`];
+//! the viewer only reads [`LiveSnapshot`]s and sends [`LiveCommand`]s.
+//!
+//! Units: SI (m, N, s), thigh frame (z along the thigh, x lateral, y up).
+
+use serde::{Deserialize, Serialize};
+
+/// Coupling between physics and haptics (see `DESIGN.md` §3).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CouplingMode {
+    /// The paper's method: physics at its rate, buffer model, 1 kHz haptic loop.
+    Buffer,
+    /// No buffer model: the physics' contact force held between physics steps.
+    Hold,
+    /// The physics stepped at the haptic rate with the device (ground truth).
+    Direct,
+}
+
+/// State of the femoral vein in the scenario.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum VeinKind {
+    /// Compressible.
+    Healthy,
+    /// Acute thrombus: hypoechoic, open, deforms a little.
+    Acute,
+    /// Chronic thrombus: echogenic, rigid.
+    Chronic,
+}
+
+/// Static mesh topology, sent once per connection.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct LiveMesh {
+    /// Rest positions of the surface nodes (m).
+    pub rest: Vec<[f32; 3]>,
+    /// Triangles as node indices.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// Latest state of the live system. Filled in place to avoid allocation.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct LiveSnapshot {
+    /// Simulated time (s).
+    pub time: f64,
+    /// Current node positions (m), same order as [`LiveMesh::rest`].
+    pub positions: Vec<[f32; 3]>,
+    /// Compression of each node's normal spring, as a fraction of its asymptote `b/a` (0..1).
+    pub compression: Vec<f32>,
+    /// Probe face centre (m).
+    pub probe_position: [f64; 3],
+    /// Probe orientation, unit quaternion (w, x, y, z).
+    pub probe_orientation: [f64; 4],
+    /// Device end-effector position (m).
+    pub device: [f64; 3],
+    /// Proxy (god-object) position (m).
+    pub proxy: [f64; 3],
+    /// Force rendered to the user, in tissue units (N).
+    pub rendered_force: [f64; 3],
+    /// The physics' own contact force on the probe (N).
+    pub physics_force: [f64; 3],
+    /// Device force limit expressed in tissue units (N), for the gauge.
+    pub max_force: f64,
+    /// Achieved physics rate (Hz).
+    pub physics_rate: f64,
+    /// Achieved haptic rate (Hz).
+    pub haptic_rate: f64,
+    /// Haptic ticks that missed their deadline since start.
+    pub missed_deadlines: u64,
+    /// Age of the buffer model (s).
+    pub model_age: f64,
+    /// Coupling mode.
+    pub mode: Option<CouplingMode>,
+    /// Configured physics rate (Hz).
+    pub physics_rate_setting: f64,
+    /// Added one-way link latency (s).
+    pub latency_setting: f64,
+    /// Whether the scripted exam is playing.
+    pub exam_playing: bool,
+}
+
+/// A command from a front end. Every numeric field is validated by the runtime.
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum LiveCommand {
+    /// Place the hand's setpoint on the thigh surface at angle `theta` (rad,
+    /// around the thigh axis, 0 = top) and axial position `z` (m), pressed
+    /// `depth` (m, ≥ 0) below the rest surface along its inward normal, with
+    /// the probe tilted by `tilt` (rad) about the thigh axis.
+    Probe {
+        /// Angle around the thigh axis (rad), 0 = anterior (top).
+        theta: f64,
+        /// Axial position (m).
+        z: f64,
+        /// Press depth below the rest surface (m).
+        depth: f64,
+        /// Tilt about the thigh axis (rad).
+        tilt: f64,
+    },
+    /// Lift the probe off the thigh.
+    Lift,
+    /// Play the scenario's scripted exam with the simulated hand.
+    PlayExam,
+    /// Stop the scripted exam (the mouse drives again).
+    StopExam,
+    /// Change the vein state.
+    SetVein {
+        /// New state.
+        vein: VeinKind,
+    },
+    /// Change the coupling mode.
+    SetMode {
+        /// New mode.
+        mode: CouplingMode,
+    },
+    /// Change the physics rate (Hz, 10..=1000).
+    SetPhysicsRate {
+        /// Rate (Hz).
+        hz: f64,
+    },
+    /// Change the added one-way link latency (s, 0..=0.2).
+    SetLatency {
+        /// Latency (s).
+        seconds: f64,
+    },
+    /// Reset the tissue, the probe and the haptic side to rest.
+    Reset,
+}
+
+/// What the runtime offers a live front end.
+pub trait LiveControl: Send + Sync {
+    /// The mesh topology (static).
+    fn mesh(&self) -> LiveMesh;
+    /// Copies the latest state into `out`.
+    fn snapshot(&self, out: &mut LiveSnapshot);
+    /// Copies the latest echographic frame (8-bit grayscale, row-major,
+    /// `width × height`, axial rows) into `out`; returns its size and a frame
+    /// counter that increases with every new frame.
+    fn image(&self, out: &mut Vec<u8>) -> (u32, u32, u64);
+    /// Current vein state.
+    fn vein(&self) -> VeinKind;
+    /// Applies a command; an invalid one is refused with a message.
+    fn command(&self, cmd: LiveCommand) -> Result<(), String>;
+}
