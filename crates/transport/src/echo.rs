@@ -1,0 +1,119 @@
+//! Synchronous request/response over a [`Link`], for round-trip latency
+//! measurements (`echothigh bench link`) and tests: an [`EchoResponder`]
+//! thread stands in for the physics and answers every probe with a sample
+//! naming it; [`round_trip`] sends a probe and waits for that answer.
+
+use crate::link::{Link, LinkError};
+use crate::message::{Message, ProbeMsg, SampleMsg};
+use crate::sequence::LinkStats;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// The sample an echo responder answers `probe` with: `probe_seq` names
+/// the probe, `p` and `t_sample` copy its position and device time, the
+/// rest is a free-space sample (distance 1 m, zero force).
+pub fn echo_sample(probe: &ProbeMsg) -> SampleMsg {
+    SampleMsg {
+        t_sample: probe.t_device,
+        probe_seq: probe.header.seq,
+        p: probe.position,
+        distance: 1.0,
+        gradient: [0.0, 1.0, 0.0],
+        ..SampleMsg::default()
+    }
+}
+
+/// A thread answering each probe it receives with [`echo_sample`] until
+/// stopped or told Bye. Its clock is the wall clock since spawning (s).
+pub struct EchoResponder {
+    stop: Arc<AtomicBool>,
+    handle: JoinHandle<Result<LinkStats, LinkError>>,
+}
+
+impl EchoResponder {
+    /// Starts answering on `link` (busy-polling with `yield_now`, for the
+    /// lowest latency).
+    pub fn spawn<L: Link + 'static>(mut link: L) -> Self {
+        let stop = Arc::new(AtomicBool::new(false));
+        let flag = Arc::clone(&stop);
+        let handle = std::thread::spawn(move || {
+            let clock = Instant::now();
+            while !flag.load(Ordering::Relaxed) {
+                let now = clock.elapsed().as_secs_f64();
+                match link.recv(now)? {
+                    Some(Message::Probe(p)) => {
+                        link.send(Message::Sample(echo_sample(&p)), now)?;
+                    }
+                    Some(Message::Bye(_)) => break,
+                    Some(_) => {}
+                    None => std::thread::yield_now(),
+                }
+            }
+            link.close(clock.elapsed().as_secs_f64())?;
+            Ok(link.stats())
+        });
+        EchoResponder { stop, handle }
+    }
+
+    /// Stops the thread and returns its link's counters.
+    pub fn stop(self) -> Result<LinkStats, LinkError> {
+        self.stop.store(true, Ordering::Relaxed);
+        match self.handle.join() {
+            Ok(r) => r,
+            Err(panic) => std::panic::resume_unwind(panic),
+        }
+    }
+}
+
+/// Sends `probe` on `link` and waits (busy-polling, wall clock) for the
+/// sample answering it; returns the round-trip time (s). `clock` is the
+/// epoch of the link's time base. Answers to earlier probes are skipped.
+pub fn round_trip<L: Link + ?Sized>(
+    link: &mut L,
+    probe: ProbeMsg,
+    clock: Instant,
+    timeout: Duration,
+) -> Result<f64, LinkError> {
+    let start = Instant::now();
+    let seq = link.send(Message::Probe(probe), clock.elapsed().as_secs_f64())?;
+    loop {
+        let now = clock.elapsed().as_secs_f64();
+        match link.recv(now)? {
+            Some(Message::Sample(s)) if s.probe_seq == seq => {
+                return Ok(start.elapsed().as_secs_f64());
+            }
+            Some(_) => {}
+            None if start.elapsed() > timeout => {
+                return Err(LinkError::RoundTripTimeout {
+                    seq,
+                    waited: timeout,
+                })
+            }
+            None => std::thread::yield_now(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{in_process_pair, FaultConfig};
+
+    #[test]
+    fn in_process_round_trips_are_answered() {
+        let (mut client, server) =
+            in_process_pair(5, FaultConfig::default(), FaultConfig::default());
+        let responder = EchoResponder::spawn(server);
+        let clock = Instant::now();
+        for i in 0..50 {
+            let probe = ProbeMsg::new(f64::from(i), [0.0; 3], [1.0, 0.0, 0.0, 0.0], 0);
+            let rtt = round_trip(&mut client, probe, clock, Duration::from_secs(5)).unwrap();
+            assert!(rtt >= 0.0);
+        }
+        client.close(clock.elapsed().as_secs_f64()).unwrap();
+        let stats = responder.stop().unwrap();
+        assert!(stats.received >= 50);
+    }
+}
