@@ -96,6 +96,61 @@ pub fn round_trip<L: Link + ?Sized>(
     }
 }
 
+/// Round-trip latency statistics (s).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RoundTripReport {
+    /// Number of round trips measured.
+    pub count: usize,
+    /// Smallest round trip (s).
+    pub min: f64,
+    /// Median round trip (s).
+    pub median: f64,
+    /// 99th percentile (nearest rank) (s).
+    pub p99: f64,
+    /// Largest round trip (s).
+    pub max: f64,
+}
+
+impl RoundTripReport {
+    /// Statistics of `samples` (s); `None` when empty or not all finite.
+    pub fn from_samples(samples: &mut [f64]) -> Option<Self> {
+        if samples.is_empty() || !samples.iter().all(|s| s.is_finite()) {
+            return None;
+        }
+        samples.sort_by(f64::total_cmp);
+        let rank = |q: f64| {
+            samples[((q * samples.len() as f64).ceil() as usize).clamp(1, samples.len()) - 1]
+        };
+        Some(RoundTripReport {
+            count: samples.len(),
+            min: samples[0],
+            median: rank(0.5),
+            p99: rank(0.99),
+            max: samples[samples.len() - 1],
+        })
+    }
+}
+
+/// Measures `count` sequential [`round_trip`]s on `link` against an echo
+/// responder (after `warmup` unrecorded ones).
+pub fn measure_round_trips<L: Link + ?Sized>(
+    link: &mut L,
+    warmup: usize,
+    count: usize,
+    timeout: Duration,
+) -> Result<Option<RoundTripReport>, LinkError> {
+    let clock = Instant::now();
+    let mut samples = Vec::with_capacity(count);
+    for i in 0..warmup + count {
+        let probe = ProbeMsg::new(i as f64, [0.0; 3], [1.0, 0.0, 0.0, 0.0], 0);
+        let rtt = round_trip(link, probe, clock, timeout)?;
+        if i >= warmup {
+            samples.push(rtt);
+        }
+    }
+    Ok(RoundTripReport::from_samples(&mut samples))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -115,5 +170,16 @@ mod tests {
         client.close(clock.elapsed().as_secs_f64()).unwrap();
         let stats = responder.stop().unwrap();
         assert!(stats.received >= 50);
+    }
+
+    #[test]
+    fn report_uses_nearest_rank_percentiles() {
+        let mut s: Vec<f64> = (1..=200).rev().map(f64::from).collect();
+        let r = RoundTripReport::from_samples(&mut s).unwrap();
+        assert_eq!((r.count, r.min, r.max), (200, 1.0, 200.0));
+        assert_eq!(r.median, 100.0);
+        assert_eq!(r.p99, 198.0);
+        assert!(RoundTripReport::from_samples(&mut []).is_none());
+        assert!(RoundTripReport::from_samples(&mut [1.0, f64::NAN]).is_none());
     }
 }

@@ -44,7 +44,7 @@ pub mod token;
 pub mod udp;
 
 pub use codec::{decode, decode_any, encode, DecodeError};
-pub use echo::{echo_sample, round_trip, EchoResponder};
+pub use echo::{echo_sample, measure_round_trips, round_trip, EchoResponder, RoundTripReport};
 pub use fault::{ConfigError, DelayLine, FaultConfig, DEFAULT_DELAY_CAPACITY};
 pub use link::{Endpoint, Link, LinkError, Transport};
 pub use memory::{in_process_pair, InProcessEndpoint, MemoryTransport};

@@ -267,7 +267,7 @@ impl<T: Transport + Send> Link for Endpoint<T> {
     }
 
     fn peer_silent(&self, now: f64, timeout: f64) -> bool {
-        self.peer_closed || self.last_heard.map_or(true, |t| now - t > timeout)
+        self.peer_closed || !matches!(self.last_heard, Some(t) if now - t <= timeout)
     }
 
     fn peer_closed(&self) -> bool {

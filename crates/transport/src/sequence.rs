@@ -127,7 +127,7 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             let seq = (x >> 33) % 500;
             if f.accept(seq, &mut stats) {
-                assert!(prev.map_or(true, |p| seq > p));
+                assert!(!matches!(prev, Some(p) if seq <= p));
                 prev = Some(seq);
             }
         }

@@ -245,7 +245,7 @@ pub fn connect(
     let mut last_hello: Option<Instant> = None;
     let mut buf = [0u8; RECV_BUF];
     while start.elapsed() < timeout {
-        if last_hello.map_or(true, |t| t.elapsed() >= HELLO_INTERVAL) {
+        if !matches!(last_hello, Some(t) if t.elapsed() < HELLO_INTERVAL) {
             let hello = HelloMsg {
                 header: Header::default(),
                 nonce,

@@ -1,0 +1,131 @@
+//! The hot paths allocate nothing: encode/decode, the sequence filter, the
+//! delay line, the in-process link with every fault on, and the UDP link.
+//! One test function, so the counting allocator sees one thread's work.
+
+mod common;
+
+use echothigh_transport::{
+    decode, encode, in_process_pair, DatagramBuf, DelayLine, FaultConfig, Link, LinkStats, Message,
+    ProbeMsg, SampleMsg, SequenceFilter, MAX_MESSAGE_SIZE,
+};
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+struct Counting;
+
+static ALLOCATIONS: AtomicU64 = AtomicU64::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        System.alloc(layout)
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        System.dealloc(ptr, layout)
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        System.realloc(ptr, layout, new_size)
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+fn allocations_in(f: impl FnOnce()) -> u64 {
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    f();
+    ALLOCATIONS.load(Ordering::SeqCst) - before
+}
+
+fn probe(t: f64) -> Message {
+    Message::Probe(ProbeMsg::new(t, [0.0, 0.08, t], [1.0, 0.0, 0.0, 0.0], 0))
+}
+
+#[test]
+fn hot_paths_do_not_allocate() {
+    // The counter sees allocations at all.
+    let n = allocations_in(|| {
+        std::hint::black_box(Vec::<u8>::with_capacity(8));
+    });
+    assert!(n >= 1, "the counting allocator is not installed");
+
+    // Codec.
+    let msg = Message::Sample(SampleMsg {
+        stiffness: 700.0,
+        ..SampleMsg::default()
+    });
+    let mut buf: DatagramBuf = [0; MAX_MESSAGE_SIZE];
+    let n = allocations_in(|| {
+        for _ in 0..1000 {
+            let len = encode(&msg, &mut buf);
+            assert!(decode(&buf[..len], 0).is_ok());
+            assert!(decode(&buf[..len - 1], 0).is_err());
+        }
+    });
+    assert_eq!(n, 0, "codec allocated");
+
+    // Sequence filter and delay line.
+    let faults = FaultConfig {
+        latency: 0.002,
+        jitter: 0.003,
+        loss: 0.2,
+        duplicate: 0.1,
+        seed: 1,
+    };
+    let mut line: DelayLine<Message> = DelayLine::new(faults, 64);
+    let mut filter = SequenceFilter::new();
+    let mut stats = LinkStats::default();
+    let n = allocations_in(|| {
+        for i in 0..5000u32 {
+            let now = f64::from(i) * 1e-3;
+            line.push(probe(now), now, &mut stats);
+            while let Some((_, m)) = line.pop_due(now) {
+                filter.accept(m.seq(), &mut stats);
+            }
+        }
+    });
+    assert_eq!(n, 0, "delay line or filter allocated");
+
+    // In-process link, every fault on, both directions.
+    let (mut haptic, mut physics) = in_process_pair(9, faults, faults.with_seed(2));
+    let n = allocations_in(|| {
+        for i in 0..5000u32 {
+            let now = f64::from(i) * 1e-3;
+            haptic.send(probe(now), now).unwrap();
+            physics.poll(now).unwrap();
+            while let Some(m) = physics.recv(now).unwrap() {
+                if let Message::Probe(p) = m {
+                    let s = SampleMsg {
+                        probe_seq: p.header.seq,
+                        ..SampleMsg::default()
+                    };
+                    physics.send(Message::Sample(s), now).unwrap();
+                }
+            }
+            while haptic.recv(now).unwrap().is_some() {}
+            let _ = haptic.peer_silent(now, 0.05);
+        }
+    });
+    assert_eq!(n, 0, "in-process link allocated");
+    assert!(haptic.stats().received > 1000);
+
+    // UDP link over loopback (set up outside the window).
+    let (mut server, mut client) = common::session(3, faults, faults.with_seed(4));
+    let n = allocations_in(|| {
+        for i in 0..2000u32 {
+            let now = f64::from(i) * 1e-3;
+            client.send(probe(now), now).unwrap();
+            while let Some(m) = server.recv(now).unwrap() {
+                let s = SampleMsg {
+                    probe_seq: m.seq(),
+                    ..SampleMsg::default()
+                };
+                server.send(Message::Sample(s), now).unwrap();
+            }
+            while client.recv(now).unwrap().is_some() {}
+        }
+    });
+    assert_eq!(n, 0, "UDP link allocated");
+    assert!(client.stats().received > 100);
+}
