@@ -19,8 +19,15 @@ pub struct Svd4 {
 }
 
 impl Svd4 {
-    /// Decomposes `m`; `None` if `m` is not finite or the SVD did not converge.
+    /// Decomposes `m`, singular values below `rcond · σ_max` counting as
+    /// zero; `None` if `m` is not finite or the SVD did not converge.
     pub fn new(m: &Matrix4<f64>, rcond: f64) -> Option<Svd4> {
+        Self::with_floor(m, rcond, 0.0)
+    }
+
+    /// As `new`, with singular values below `floor` also counting as zero
+    /// (a scale taken from a larger problem this one was reduced from).
+    pub fn with_floor(m: &Matrix4<f64>, rcond: f64, floor: f64) -> Option<Svd4> {
         if !m.iter().all(|v| v.is_finite()) {
             return None;
         }
@@ -31,7 +38,7 @@ impl Svd4 {
             u,
             sigma: svd.singular_values,
             v_t,
-            cutoff: (rcond * smax).max(f64::MIN_POSITIVE),
+            cutoff: (rcond * smax).max(floor).max(f64::MIN_POSITIVE),
         })
     }
 
@@ -96,9 +103,11 @@ impl QrAccumulator {
         self.rss += b * b;
     }
 
-    /// Minimum-norm least-squares solution and its rank; `None` if not finite.
-    pub fn solve(&self, rcond: f64) -> Option<(Vector4<f64>, usize)> {
-        let svd = Svd4::new(&self.r, rcond)?;
+    /// Minimum-norm least-squares solution and its rank, singular values of
+    /// R below `rcond · σ_max` or below `floor` counting as zero; `None` if
+    /// not finite.
+    pub fn solve(&self, rcond: f64, floor: f64) -> Option<(Vector4<f64>, usize)> {
+        let svd = Svd4::with_floor(&self.r, rcond, floor)?;
         let y = svd.solve_coords(&self.q);
         Some((svd.v_t.tr_mul(&y), svd.rank()))
     }
@@ -123,7 +132,7 @@ mod tests {
             let a = Vector4::new(1.0, t, t * t, t * t * t);
             acc.add_row(&a, a.dot(&truth));
         }
-        let (x, rank) = acc.solve(1e-12).unwrap();
+        let (x, rank) = acc.solve(1e-12, 0.0).unwrap();
         assert_eq!(rank, 4);
         assert!((x - truth).norm() < 1e-12);
         assert!(acc.residual_sum_of_squares() < 1e-24);
@@ -135,7 +144,7 @@ mod tests {
         let mut acc = QrAccumulator::default();
         acc.add_row(&Vector4::new(1.0, 1.0, 0.0, 0.0), 2.0);
         acc.add_row(&Vector4::new(2.0, 2.0, 0.0, 0.0), 4.0);
-        let (x, rank) = acc.solve(1e-9).unwrap();
+        let (x, rank) = acc.solve(1e-9, 0.0).unwrap();
         assert_eq!(rank, 1);
         assert!((x - Vector4::new(1.0, 1.0, 0.0, 0.0)).norm() < 1e-12);
     }
@@ -144,6 +153,6 @@ mod tests {
     fn non_finite_is_rejected() {
         let mut acc = QrAccumulator::default();
         acc.add_row(&Vector4::new(f64::NAN, 1.0, 0.0, 0.0), 1.0);
-        assert!(acc.solve(1e-9).is_none());
+        assert!(acc.solve(1e-9, 0.0).is_none());
     }
 }

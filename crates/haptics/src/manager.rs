@@ -32,6 +32,9 @@ use crate::local_model::{LocalModel, ModelParams, Params, Plane, Sphere};
 use crate::lsq::{QrAccumulator, Svd4};
 use crate::Vec3;
 
+/// Residual at the newest sample beyond which the fit is re-seated, m.
+const INTERPOLATION_TOLERANCE: f64 = 1e-9;
+
 /// What the physics reports each step (DESIGN §2), in the haptic crate's terms.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sample {
@@ -208,9 +211,17 @@ impl ModelManager {
                 break;
             }
         }
-        if !self.acceptable(&model, &s) {
+        // The newest sample is always satisfiable (module docs): a residual
+        // left at it means Gauss–Newton failed (e.g. the step limit on a deep
+        // contact), so re-seat, keeping the fitted radius when it is sane.
+        let unfitted = self.residual(&model, &s).norm() > INTERPOLATION_TOLERANCE;
+        if unfitted || !self.acceptable(&model, &s) {
             report.reseated = true;
-            model = self.seat(&s, fallback_radius);
+            let radius = match model {
+                ModelParams::Sphere(sp) if self.acceptable(&model, &s) => sp.radius,
+                _ => fallback_radius,
+            };
+            model = self.seat(&s, radius);
         }
         self.model = Some(model);
         report.residual = self.residual(&model, &s).norm();
@@ -335,7 +346,10 @@ impl ModelManager {
                     self.acc.add_row(&(a_v * sw), rhs * sw);
                 }
             }
-            let (z, rank) = self.acc.solve(self.config.rcond)?;
+            // Rank is judged on the scale of the full Jacobian, not of the
+            // (possibly tiny) reduced window rows.
+            let floor = self.config.rcond * svd.sigma.max();
+            let (z, rank) = self.acc.solve(self.config.rcond, floor)?;
             rank_window = rank;
             for i in 0..4 {
                 if !svd.in_range(i) {

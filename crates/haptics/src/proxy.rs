@@ -6,7 +6,10 @@
 //! 1. if `φ(p) ≥ 0`, `x = p` (free space);
 //! 2. otherwise move `x` along its straight path towards `p` until contact;
 //! 3. then minimize `½|x − p|²` on the plane tangent at `x` and re-project
-//!    onto `φ = 0` (the paper's first-order constraint plane),
+//!    onto `φ = 0` (the paper's first-order constraint plane), repeated
+//!    until stationary, and warm-started at the re-projection of `p`, which
+//!    is already the minimum for signed-distance models like ours (one pass
+//!    from the proxy converges only by a factor depth/radius per pass),
 //!
 //! where step 3 is limited by friction (static and kinetic cones with
 //! hysteresis, CHAI3D's behaviour) and the surface carries a texture (a
@@ -120,6 +123,11 @@ pub struct Proxy {
     pub sliding: bool,
 }
 
+/// Tangent-plane passes per tick when polishing the frictionless goal (one
+/// is exact on a plane; curved surfaces converge by about depth/radius per
+/// pass).
+const MAX_PASSES: usize = 8;
+
 /// Distance beyond which a proxy counts as off the surface, m.
 const ON_SURFACE: f64 = 1e-9;
 
@@ -131,6 +139,30 @@ impl Proxy {
             in_contact: false,
             sliding: false,
         }
+    }
+
+    /// The constrained minimum of `½|x − p|²` on `φ_eff = 0` near the proxy
+    /// `x` (the frictionless proxy). Both local models are exact signed
+    /// distances, so the re-projection of `p` is the minimum; it is accepted
+    /// only on the proxy's side of the surface (normals within 90°: no
+    /// pop-through), else the paper's tangent-plane steps start from `x`.
+    /// Tangent-plane passes then polish it (textured surfaces).
+    fn frictionless_goal(&self, surface: &Surface, p: &Vec3, x: &Vec3) -> Vec3 {
+        let mut g = surface.project(p);
+        let same_side = surface.normal(&g).dot(&surface.normal(x)) > 0.0;
+        if !same_side || !g.iter().all(|c| c.is_finite()) {
+            g = *x;
+        }
+        for _ in 0..MAX_PASSES {
+            let n = surface.normal(&g);
+            let v = p - g;
+            let vt = v - v.dot(&n) * n;
+            if vt.norm() < 1e-13 {
+                break;
+            }
+            g = surface.project(&(g + vt));
+        }
+        g
     }
 
     /// One proxy update for device position `p` against `surface`.
@@ -150,25 +182,32 @@ impl Proxy {
             self.sliding = false;
         }
         self.in_contact = true;
+        let goal = self.frictionless_goal(surface, p, &x);
+        // Friction cone at the proxy: stick while |f_t| ≤ μ |f_n| (μ_s when
+        // sticking, μ_k when already sliding: the hysteresis).
         let n = surface.normal(&x);
         let v = p - x;
         let vn = v.dot(&n);
         let depth = (-vn).max(0.0);
-        let vt = v - vn * n;
-        let dt = vt.norm();
+        let dt = (v - vn * n).norm();
         let mu = if self.sliding {
             friction.kinetic_coefficient
         } else {
             friction.static_coefficient
         };
-        if dt <= mu * depth {
-            // Inside the cone: stick (leaving the kinetic cone ends sliding).
+        if dt <= mu * depth + 1e-15 {
             self.sliding = false;
         } else {
-            // Slide on the tangent plane to the kinetic cone's edge, re-project.
-            let keep = friction.kinetic_coefficient * depth;
-            x += vt * ((dt - keep) / dt);
-            x = surface.project(&x);
+            // Slide towards the frictionless goal, stopping at the kinetic
+            // cone's edge: a tangential offset of μ_k · depth behind it.
+            let ng = surface.normal(&goal);
+            let d = x - goal;
+            let d_t = d - d.dot(&ng) * ng;
+            let len = d_t.norm();
+            let keep = friction.kinetic_coefficient * (goal - p).dot(&ng).max(0.0);
+            if len > keep {
+                x = surface.project(&(goal + d_t * (keep / len)));
+            }
             self.sliding = true;
         }
         self.position = x;
