@@ -1,0 +1,273 @@
+//! Force–indentation data: the CSV format the calibration reads.
+//!
+//! ```text
+//! # comment lines start with '#'
+//! depth_mm,force_n
+//! 0.0,0.0
+//! 1.0,0.47
+//! ```
+//!
+//! Required columns (by header name, case-insensitive, any order; other
+//! columns are ignored): `depth_mm`, the probe's displacement from first
+//! contact (mm, ≥ 0, strictly increasing), and `force_n`, the normal force on
+//! the probe (N, ≥ 0). Every error names its line (1-based, counting comment
+//! lines). Fields are plain comma-separated values (surrounding double quotes
+//! are stripped; quoted commas are not supported: numbers need none). Parsed
+//! by hand rather than with the `csv` crate, whose record positions do not
+//! count comment lines.
+
+use crate::error::CsvError;
+use std::io::Read;
+use std::path::Path;
+
+/// A force–indentation curve, in SI units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IndentationCurve {
+    /// Indentation depths from first contact, m, strictly increasing.
+    pub depth: Vec<f64>,
+    /// Normal force on the probe at each depth, N.
+    pub force: Vec<f64>,
+}
+
+/// Minimum number of data rows accepted.
+pub const MIN_ROWS: usize = 3;
+
+impl IndentationCurve {
+    /// Parses the CSV text described in the module docs.
+    pub fn from_csv_str(text: &str) -> Result<Self, CsvError> {
+        Self::from_reader(text.as_bytes())
+    }
+
+    /// Reads and parses a CSV file.
+    pub fn from_path(path: &Path) -> Result<Self, CsvError> {
+        let f = std::fs::File::open(path)
+            .map_err(|e| CsvError::Io(format!("{}: {e}", path.display())))?;
+        Self::from_reader(f)
+    }
+
+    /// Parses CSV from any reader.
+    pub fn from_reader(mut r: impl Read) -> Result<Self, CsvError> {
+        let mut text = String::new();
+        r.read_to_string(&mut text)
+            .map_err(|e| CsvError::Io(e.to_string()))?;
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .map(|(i, l)| (i as u64 + 1, l.trim()))
+            .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+        let Some((header_line, header)) = lines.next() else {
+            return Err(CsvError::TooFewRows {
+                found: 0,
+                required: MIN_ROWS,
+            });
+        };
+        let headers: Vec<&str> = fields(header).collect();
+        let find = |name: &'static str| {
+            headers
+                .iter()
+                .position(|h| h.eq_ignore_ascii_case(name))
+                .ok_or_else(|| CsvError::MissingColumn {
+                    line: header_line,
+                    column: name,
+                    found: headers.join(","),
+                })
+        };
+        let i_depth = find("depth_mm")?;
+        let i_force = find("force_n")?;
+        let mut depth = Vec::new();
+        let mut force = Vec::new();
+        for (line, l) in lines {
+            let rec: Vec<&str> = fields(l).collect();
+            if rec.len() < headers.len() {
+                return Err(CsvError::ShortRow {
+                    line,
+                    expected: headers.len(),
+                    found: rec.len(),
+                });
+            }
+            let num = |i: usize, column: &'static str| -> Result<f64, CsvError> {
+                let text = rec[i];
+                match text.parse::<f64>() {
+                    Ok(v) if v.is_finite() => Ok(v),
+                    _ => Err(CsvError::NotANumber {
+                        line,
+                        column,
+                        text: text.to_string(),
+                    }),
+                }
+            };
+            let d = num(i_depth, "depth_mm")?;
+            let f = num(i_force, "force_n")?;
+            for (column, value) in [("depth_mm", d), ("force_n", f)] {
+                if value < 0.0 {
+                    return Err(CsvError::Negative {
+                        line,
+                        column,
+                        value,
+                    });
+                }
+            }
+            if let Some(&prev) = depth.last() {
+                let prev_mm: f64 = prev * 1e3;
+                if d <= prev_mm {
+                    return Err(CsvError::NonMonotonicDepth {
+                        line,
+                        depth_mm: d,
+                        previous_mm: prev_mm,
+                    });
+                }
+            }
+            depth.push(d * 1e-3);
+            force.push(f);
+        }
+        if depth.len() < MIN_ROWS {
+            return Err(CsvError::TooFewRows {
+                found: depth.len(),
+                required: MIN_ROWS,
+            });
+        }
+        Ok(Self { depth, force })
+    }
+
+    /// Writes the curve as CSV text (`depth_mm,force_n`), with `comment`
+    /// lines first (each prefixed by `# `).
+    pub fn to_csv_string(&self, comment: &str) -> String {
+        let mut s = String::new();
+        for l in comment.lines() {
+            s.push_str("# ");
+            s.push_str(l);
+            s.push('\n');
+        }
+        s.push_str("depth_mm,force_n\n");
+        for (d, f) in self.depth.iter().zip(&self.force) {
+            s.push_str(&format!("{:.3},{:.5}\n", d * 1e3, f));
+        }
+        s
+    }
+
+    /// Linear interpolation of the force at depth `d` (m), clamped to the
+    /// curve's range.
+    pub fn force_at(&self, d: f64) -> f64 {
+        interpolate(&self.depth, &self.force, d)
+    }
+}
+
+/// The comma-separated fields of a line, trimmed, surrounding double quotes
+/// removed.
+fn fields(line: &str) -> impl Iterator<Item = &str> {
+    line.split(',').map(|f| f.trim().trim_matches('"').trim())
+}
+
+/// Piecewise-linear interpolation of `(xs, ys)` at `x`, `xs` increasing,
+/// clamped at both ends.
+pub fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
+    match xs.len() {
+        0 => 0.0,
+        1 => ys[0],
+        n => {
+            if x <= xs[0] {
+                return ys[0];
+            }
+            if x >= xs[n - 1] {
+                return ys[n - 1];
+            }
+            let k = xs.partition_point(|&v| v <= x).clamp(1, n - 1);
+            let t = (x - xs[k - 1]) / (xs[k] - xs[k - 1]);
+            ys[k - 1] + t * (ys[k] - ys[k - 1])
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_with_comments_any_order_and_extra_columns() {
+        let c = IndentationCurve::from_csv_str(
+            "# source\n# more\nforce_N, note ,Depth_mm\n0,a,0\n0.5,b,1.0\n1.2,c,2\n",
+        )
+        .unwrap();
+        assert_eq!(c.depth, vec![0.0, 0.001, 0.002]);
+        assert_eq!(c.force, vec![0.0, 0.5, 1.2]);
+        assert!((c.force_at(0.0015) - 0.85).abs() < 1e-12);
+    }
+
+    #[test]
+    fn missing_column_names_header_line() {
+        let e =
+            IndentationCurve::from_csv_str("# c\ndepth_mm,newtons\n0,0\n1,1\n2,2\n").unwrap_err();
+        assert!(
+            matches!(
+                e,
+                CsvError::MissingColumn {
+                    line: 2,
+                    column: "force_n",
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        assert!(e
+            .to_string()
+            .starts_with("line 2: missing column `force_n`"));
+    }
+
+    #[test]
+    fn non_numeric_names_its_line() {
+        let e =
+            IndentationCurve::from_csv_str("depth_mm,force_n\n0,0\n# c\n1,abc\n2,2\n").unwrap_err();
+        assert_eq!(
+            e,
+            CsvError::NotANumber {
+                line: 4,
+                column: "force_n",
+                text: "abc".into()
+            }
+        );
+        let e = IndentationCurve::from_csv_str("depth_mm,force_n\n0,0\n1,NaN\n").unwrap_err();
+        assert!(matches!(e, CsvError::NotANumber { line: 3, .. }));
+    }
+
+    #[test]
+    fn non_monotonic_depth_names_its_line() {
+        let e =
+            IndentationCurve::from_csv_str("depth_mm,force_n\n0,0\n2,1\n1.5,2\n3,3\n").unwrap_err();
+        assert_eq!(
+            e,
+            CsvError::NonMonotonicDepth {
+                line: 4,
+                depth_mm: 1.5,
+                previous_mm: 2.0
+            }
+        );
+        assert!(e.to_string().contains("line 4"));
+    }
+
+    #[test]
+    fn short_rows_negative_values_and_too_few_rows() {
+        let e = IndentationCurve::from_csv_str("depth_mm,force_n\n0,0\n1\n").unwrap_err();
+        assert!(matches!(e, CsvError::ShortRow { line: 3, .. }), "{e:?}");
+        let e = IndentationCurve::from_csv_str("depth_mm,force_n\n0,-1\n").unwrap_err();
+        assert!(matches!(
+            e,
+            CsvError::Negative {
+                line: 2,
+                column: "force_n",
+                ..
+            }
+        ));
+        let e = IndentationCurve::from_csv_str("depth_mm,force_n\n0,0\n1,1\n").unwrap_err();
+        assert!(matches!(e, CsvError::TooFewRows { found: 2, .. }));
+    }
+
+    #[test]
+    fn csv_round_trip() {
+        let c = IndentationCurve {
+            depth: vec![0.0, 0.001, 0.0025],
+            force: vec![0.0, 0.4, 1.25],
+        };
+        let back = IndentationCurve::from_csv_str(&c.to_csv_string("x\ny")).unwrap();
+        assert_eq!(back, c);
+    }
+}
