@@ -8,6 +8,7 @@ mod cmd;
 mod live;
 #[allow(dead_code)] // used by the commands that write plots as they land
 mod plot;
+mod view;
 
 use clap::{Parser, Subcommand};
 
@@ -31,6 +32,8 @@ enum Command {
     Calibrate(cmd::calibrate::Args),
     /// Render B-mode echographic frames under the probe.
     Image(cmd::image::Args),
+    /// The trainee's live web viewer (3D thigh, probe, image, force, exam mode).
+    View(view::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -45,6 +48,7 @@ fn main() -> std::process::ExitCode {
         Command::Bench(b) => bench::run(b),
         Command::Calibrate(a) => cmd::calibrate::run(a),
         Command::Image(a) => cmd::image::run(a),
+        Command::View(a) => view::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -1,0 +1,234 @@
+// The trainee's page: connects to /ws, shows the live state, drives the probe
+// with the mouse and keyboard, and runs the exam mode. Protocol: see the
+// server's `view/protocol.rs` (JSON envelopes {v, type, ...}; binary frames
+// with a 16-byte header "ETHV", version, kind, a, b).
+import { ThighScene } from './scene.js';
+import { EchoView, ForcePlot, Gauge, norm, showStatus } from './panels.js';
+
+const PROTOCOL_VERSION = 1;
+const FRAME_IMAGE = 1;
+const FRAME_SURFACE = 2;
+const DEPTH_STEP = 0.0005; // m per wheel notch or key press
+const MAX_DEPTH = 0.035; // m, below the server's limit
+const TILT_STEP = 0.05; // rad
+const MAX_TILT = 0.7; // rad
+
+const $ = (id) => document.getElementById(id);
+
+// What the page knows, readable by tests and the console.
+const live = {
+  connected: false, hello: null, state: null, lastError: null, errors: 0,
+  imageFrames: 0, surfaceFrames: 0, probe: { theta: 0, z: 0, depth: 0.008, tilt: 0, placed: false },
+};
+window.echothigh = live;
+
+let scene = null;
+try {
+  scene = new ThighScene($('scene'));
+} catch (e) {
+  $('scene-msg').textContent = `3D view unavailable (WebGL): ${e.message}`;
+  $('scene-msg').classList.remove('hidden');
+}
+live.scene = scene; // for the browser test and the console
+const echo = new EchoView($('echo'));
+const plot = new ForcePlot($('plot'), 5);
+const gauge = new Gauge($('gauge-fill'), $('gauge-limit'), $('gauge-value'));
+
+// ---- connection -----------------------------------------------------------
+let ws = null;
+function connect() {
+  ws = new WebSocket(`${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/ws`);
+  ws.binaryType = 'arraybuffer';
+  ws.onopen = () => { live.connected = true; setConn(true); };
+  ws.onclose = () => { live.connected = false; setConn(false); setTimeout(connect, 1000); };
+  ws.onmessage = (ev) => (typeof ev.data === 'string' ? onJson(ev.data) : onFrame(ev.data));
+}
+function setConn(on) {
+  $('conn').textContent = on ? 'live' : 'disconnected — retrying';
+  $('conn').className = `conn ${on ? 'on' : 'off'}`;
+}
+function send(msg) {
+  if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg));
+}
+live.send = send;
+
+function onJson(text) {
+  const msg = JSON.parse(text);
+  if (msg.v !== PROTOCOL_VERSION) return toast(`server speaks protocol v${msg.v}, page v${PROTOCOL_VERSION}`);
+  if (msg.type === 'hello') {
+    live.hello = msg;
+    if (scene) scene.setMesh(msg.mesh);
+  } else if (msg.type === 'state') {
+    onState(msg);
+  } else if (msg.type === 'error') {
+    live.lastError = msg.message;
+    live.errors += 1;
+    toast(msg.message);
+  }
+}
+
+function onFrame(buf) {
+  const head = new DataView(buf, 0, 16);
+  const magic = String.fromCharCode(...new Uint8Array(buf, 0, 4));
+  if (magic !== 'ETHV' || head.getUint8(4) !== PROTOCOL_VERSION) return;
+  const kind = head.getUint8(5), a = head.getUint32(8, true), b = head.getUint32(12, true);
+  if (kind === FRAME_IMAGE && buf.byteLength === 16 + a * b) {
+    echo.draw(a, b, new Uint8Array(buf, 16, a * b));
+    live.imageFrames += 1;
+  } else if (kind === FRAME_SURFACE && buf.byteLength === 16 + 16 * a) {
+    if (scene) scene.updateSurface(new Float32Array(buf, 16, 3 * a), new Float32Array(buf, 16 + 12 * a, a));
+    live.surfaceFrames += 1;
+  }
+}
+
+// ---- state ---------------------------------------------------------------
+let renderedFps = 0;
+function onState(s) {
+  live.state = s;
+  const rendered = norm(s.rendered_force), physics = norm(s.physics_force);
+  plot.push(s.time, rendered, physics);
+  gauge.update(rendered, s.max_force);
+  if (scene) scene.updateState(s);
+  showStatus(s, renderedFps);
+  syncControls(s);
+  showExam(s.exam);
+}
+
+function syncControls(s) {
+  const idle = (el) => document.activeElement !== el;
+  if (s.vein && idle($('vein'))) $('vein').value = s.vein;
+  $('vein').disabled = !s.vein;
+  if (s.mode && idle($('mode'))) $('mode').value = s.mode;
+  if (idle($('rate'))) { $('rate').value = s.physics_rate_setting; $('rate-v').textContent = s.physics_rate_setting.toFixed(0); }
+  if (idle($('latency'))) {
+    $('latency').value = s.latency_setting * 1000;
+    $('latency-v').textContent = (s.latency_setting * 1000).toFixed(0);
+  }
+  $('play').textContent = s.exam_playing ? 'Stop scripted exam' : 'Play scripted exam';
+}
+
+function showExam(e) {
+  $('exam-start').textContent = e.question > 0 && !e.open ? 'Next question' : 'Start a question';
+  $('exam-start').disabled = e.open;
+  $('answer-yes').disabled = $('answer-no').disabled = !e.open;
+  $('exam-stop').disabled = !e.open;
+  $('exam-status').textContent = e.question === 0 ? '' :
+    `question ${e.question}${e.open ? ` · peak force ${e.peak_force.toFixed(1)} N` : ''} · ` +
+    `session score ${e.correct} / ${e.answered}`;
+  const r = e.last;
+  $('exam-result').textContent = r ? `Q${r.question}: ${r.correct ? 'correct' : 'wrong'} — the vein was ` +
+    `${r.truth} (${r.truth === 'healthy' ? 'compressible' : 'not compressible'}); peak force used ` +
+    `${r.peak_force.toFixed(1)} N` : '';
+  $('exam-result').className = r ? (r.correct ? 'right' : 'wrong') : '';
+}
+
+let toastTimer = null;
+function toast(text) {
+  $('toast').textContent = text;
+  $('toast').classList.remove('hidden');
+  clearTimeout(toastTimer);
+  toastTimer = setTimeout(() => $('toast').classList.add('hidden'), 4000);
+}
+
+// ---- probe driving -------------------------------------------------------
+let probeDirty = false;
+function sendProbeSoon() { probeDirty = true; }
+function flushProbe() {
+  if (!probeDirty || !live.probe.placed) return;
+  probeDirty = false;
+  const p = live.probe;
+  send({ type: 'probe', theta: p.theta, z: p.z, depth: p.depth, tilt: p.tilt });
+}
+function setDepth(d) {
+  live.probe.depth = Math.min(Math.max(d, 0), MAX_DEPTH);
+  $('depth').textContent = (live.probe.depth * 1000).toFixed(1);
+  sendProbeSoon();
+}
+function setTilt(t) {
+  live.probe.tilt = Math.min(Math.max(t, -MAX_TILT), MAX_TILT);
+  $('tilt').textContent = ((live.probe.tilt * 180) / Math.PI).toFixed(0);
+  sendProbeSoon();
+}
+function lift() {
+  live.probe.placed = false;
+  send({ type: 'lift' });
+}
+
+const canvas = $('scene');
+let drag = null; // {mode: 'probe' | 'orbit', x, y}
+canvas.addEventListener('contextmenu', (e) => e.preventDefault());
+canvas.addEventListener('pointerdown', (e) => {
+  canvas.setPointerCapture(e.pointerId);
+  const hit = scene && e.button === 0 ? scene.pick(e.clientX, e.clientY) : null;
+  if (hit) {
+    if (live.state && live.state.exam_playing) send({ type: 'stop_exam' });
+    Object.assign(live.probe, hit, { placed: true });
+    sendProbeSoon();
+  }
+  drag = { mode: hit ? 'probe' : 'orbit', x: e.clientX, y: e.clientY };
+});
+canvas.addEventListener('pointermove', (e) => {
+  if (!drag || !scene) return;
+  if (drag.mode === 'probe') {
+    const hit = scene.pick(e.clientX, e.clientY);
+    if (hit) { Object.assign(live.probe, hit); sendProbeSoon(); }
+  } else {
+    scene.rotate(e.clientX - drag.x, e.clientY - drag.y);
+  }
+  drag.x = e.clientX; drag.y = e.clientY;
+});
+canvas.addEventListener('pointerup', () => { drag = null; });
+canvas.addEventListener('wheel', (e) => {
+  e.preventDefault();
+  if (e.shiftKey) { if (scene) scene.zoom(e.deltaY > 0 ? 1.1 : 1 / 1.1); return; }
+  setDepth(live.probe.depth + (e.deltaY < 0 ? DEPTH_STEP : -DEPTH_STEP));
+}, { passive: false });
+window.addEventListener('keydown', (e) => {
+  if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
+  const k = e.key.toLowerCase();
+  if (k === 'arrowup' || k === 'w') setDepth(live.probe.depth + DEPTH_STEP);
+  else if (k === 'arrowdown' || k === 's') setDepth(live.probe.depth - DEPTH_STEP);
+  else if (k === 'q') setTilt(live.probe.tilt - TILT_STEP);
+  else if (k === 'e') setTilt(live.probe.tilt + TILT_STEP);
+  else if (k === 'l') lift();
+  else return;
+  e.preventDefault();
+});
+
+// ---- controls ------------------------------------------------------------
+$('vein').addEventListener('change', (e) => send({ type: 'set_vein', vein: e.target.value }));
+$('mode').addEventListener('change', (e) => send({ type: 'set_mode', mode: e.target.value }));
+$('rate').addEventListener('input', (e) => { $('rate-v').textContent = e.target.value; });
+$('rate').addEventListener('change', (e) => send({ type: 'set_physics_rate', hz: Number(e.target.value) }));
+$('latency').addEventListener('input', (e) => { $('latency-v').textContent = e.target.value; });
+$('latency').addEventListener('change', (e) => send({ type: 'set_latency', seconds: Number(e.target.value) / 1000 }));
+$('lift').addEventListener('click', lift);
+$('reset').addEventListener('click', () => { live.probe.placed = false; send({ type: 'reset' }); });
+$('play').addEventListener('click', () => {
+  live.probe.placed = false;
+  send({ type: live.state && live.state.exam_playing ? 'stop_exam' : 'play_exam' });
+});
+$('exam-start').addEventListener('click', () => { live.probe.placed = false; send({ type: 'exam_start' }); });
+$('answer-yes').addEventListener('click', () => send({ type: 'exam_answer', compressible: true }));
+$('answer-no').addEventListener('click', () => send({ type: 'exam_answer', compressible: false }));
+$('exam-stop').addEventListener('click', () => send({ type: 'exam_stop' }));
+
+// ---- frame loop ----------------------------------------------------------
+let fpsWindow = { t: performance.now(), frames: 0, echo: 0 };
+function frame(now) {
+  flushProbe();
+  if (scene) scene.render();
+  plot.draw();
+  fpsWindow.frames += 1;
+  if (now - fpsWindow.t >= 1000) {
+    const dt = (now - fpsWindow.t) / 1000;
+    renderedFps = fpsWindow.frames / dt;
+    $('echo-fps').textContent = `${((echo.frames - fpsWindow.echo) / dt).toFixed(0)} frames/s`;
+    fpsWindow = { t: now, frames: 0, echo: echo.frames };
+  }
+  requestAnimationFrame(frame);
+}
+setDepth(live.probe.depth);
+probeDirty = false;
+connect();
+requestAnimationFrame(frame);

@@ -1,0 +1,195 @@
+// The 3D view: the thigh surface deforming and coloured by compression, the
+// probe box, the device and proxy markers, the force vectors. Positions in m,
+// thigh frame (z along the axis, y anterior = up), which three.js shows as is.
+import * as THREE from 'three';
+
+const BACKGROUND = 0x1b2029;
+const REST = new THREE.Color(0xecbf9f);
+const MID = new THREE.Color(0xe8a33a);
+const FULL = new THREE.Color(0xc0262b);
+// Arrow length per newton of force (m/N), and its cap (m).
+const ARROW_M_PER_N = 0.004;
+const ARROW_MAX = 0.12;
+
+/** Colour of a node whose normal spring is compressed by `c` (fraction of its asymptote). */
+function compressionColour(c, out) {
+  const t = Math.min(Math.max(c, 0), 1);
+  if (t < 0.5) out.copy(REST).lerp(MID, t * 2);
+  else out.copy(MID).lerp(FULL, (t - 0.5) * 2);
+  return out;
+}
+
+export class ThighScene {
+  constructor(canvas) {
+    this.canvas = canvas;
+    // preserveDrawingBuffer lets tests and screenshots read the pixels back.
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+    this.scene = new THREE.Scene();
+    this.scene.background = new THREE.Color(BACKGROUND);
+    this.camera = new THREE.PerspectiveCamera(40, 1, 0.005, 10);
+    this.target = new THREE.Vector3();
+    this.orbit = { azimuth: 0.75, elevation: 0.45, distance: 0.75 };
+    this.scene.add(new THREE.HemisphereLight(0xffffff, 0x404050, 1.4));
+    const sun = new THREE.DirectionalLight(0xffffff, 1.6);
+    sun.position.set(0.4, 1.0, 0.6);
+    this.scene.add(sun);
+    this.thigh = null;
+    this.restMesh = null;
+    this.raycaster = new THREE.Raycaster();
+    this.buildProbe();
+    this.frames = 0;
+  }
+
+  buildProbe() {
+    // Probe: face 40 mm lateral (local x) × 10 mm elevation (local z); face at
+    // local y = 0, body towards +y (ARCHITECTURE.md, contact).
+    const height = 0.07;
+    const geom = new THREE.BoxGeometry(0.04, height, 0.01);
+    geom.translate(0, height / 2, 0);
+    this.probe = new THREE.Mesh(geom, new THREE.MeshStandardMaterial({
+      color: 0x8fa3bf, transparent: true, opacity: 0.55, roughness: 0.4 }));
+    this.probe.add(new THREE.LineSegments(new THREE.EdgesGeometry(geom),
+      new THREE.LineBasicMaterial({ color: 0xd6e2f5 })));
+    this.probe.visible = false;
+    this.scene.add(this.probe);
+    const marker = (colour) => {
+      const m = new THREE.Mesh(new THREE.SphereGeometry(0.0035, 16, 12),
+        new THREE.MeshBasicMaterial({ color: colour, depthTest: false }));
+      m.renderOrder = 2;
+      m.visible = false;
+      this.scene.add(m);
+      return m;
+    };
+    this.deviceMarker = marker(0x3d8bff);
+    this.proxyMarker = marker(0x3fd07a);
+    const arrow = (colour) => {
+      const a = new THREE.ArrowHelper(new THREE.Vector3(0, 1, 0), new THREE.Vector3(), 0.05, colour, 0.012, 0.008);
+      a.visible = false;
+      a.line.material.depthTest = false;
+      a.cone.material.depthTest = false;
+      a.renderOrder = 3;
+      this.scene.add(a);
+      return a;
+    };
+    this.renderedArrow = arrow(0xff9a1f);
+    this.physicsArrow = arrow(0xb071ff);
+  }
+
+  /** Builds the thigh from the server's `hello` mesh ({rest: [[x,y,z]], triangles: [[a,b,c]]}). */
+  setMesh(mesh) {
+    if (this.thigh) { this.scene.remove(this.thigh); this.thigh.geometry.dispose(); }
+    const n = mesh.rest.length;
+    const rest = new Float32Array(n * 3);
+    mesh.rest.forEach((p, i) => rest.set(p, i * 3));
+    const index = new Uint32Array(mesh.triangles.length * 3);
+    mesh.triangles.forEach((t, i) => index.set(t, i * 3));
+    const colours = new Float32Array(n * 3);
+    const c = new THREE.Color();
+    for (let i = 0; i < n; i++) compressionColour(0, c).toArray(colours, i * 3);
+
+    const geom = new THREE.BufferGeometry();
+    geom.setAttribute('position', new THREE.BufferAttribute(rest.slice(), 3));
+    geom.setAttribute('color', new THREE.BufferAttribute(colours, 3));
+    geom.setIndex(new THREE.BufferAttribute(index, 1));
+    geom.computeVertexNormals();
+    this.thigh = new THREE.Mesh(geom, new THREE.MeshStandardMaterial({
+      vertexColors: true, side: THREE.DoubleSide, roughness: 0.75, metalness: 0.0 }));
+    this.scene.add(this.thigh);
+
+    // The rest surface, invisible, is what the mouse ray hits: dragging
+    // follows the undeformed surface, as the runtime's (theta, z) expects.
+    const restGeom = new THREE.BufferGeometry();
+    restGeom.setAttribute('position', new THREE.BufferAttribute(rest, 3));
+    restGeom.setIndex(new THREE.BufferAttribute(index, 1));
+    restGeom.computeBoundingSphere();
+    this.restMesh = new THREE.Mesh(restGeom, new THREE.MeshBasicMaterial({ side: THREE.DoubleSide }));
+    this.restMesh.updateMatrixWorld();
+    restGeom.computeBoundingBox();
+    restGeom.boundingBox.getCenter(this.target);
+    this.orbit.distance = 3.0 * restGeom.boundingSphere.radius;
+  }
+
+  /** Applies a surface frame: `positions` (3n f32, m) and `compression` (n f32, 0..1). */
+  updateSurface(positions, compression) {
+    if (!this.thigh) return;
+    const geom = this.thigh.geometry;
+    const pos = geom.attributes.position;
+    if (pos.array.length !== positions.length) return;
+    pos.array.set(positions);
+    pos.needsUpdate = true;
+    const col = geom.attributes.color;
+    const c = new THREE.Color();
+    for (let i = 0; i < compression.length; i++) compressionColour(compression[i], c).toArray(col.array, i * 3);
+    col.needsUpdate = true;
+    geom.computeVertexNormals();
+    geom.computeBoundingSphere();
+  }
+
+  /** Places the probe, markers and force arrows from a `state` message. */
+  updateState(s) {
+    const v = (a) => new THREE.Vector3(a[0], a[1], a[2]);
+    const [w, x, y, z] = s.probe_orientation;
+    const valid = Math.abs(w * w + x * x + y * y + z * z - 1) < 0.1;
+    this.probe.visible = valid;
+    if (valid) {
+      this.probe.position.copy(v(s.probe_position));
+      this.probe.quaternion.set(x, y, z, w);
+    }
+    this.deviceMarker.visible = this.proxyMarker.visible = true;
+    this.deviceMarker.position.copy(v(s.device));
+    this.proxyMarker.position.copy(v(s.proxy));
+    this.setArrow(this.renderedArrow, v(s.probe_position), v(s.rendered_force));
+    this.setArrow(this.physicsArrow, v(s.probe_position), v(s.physics_force));
+  }
+
+  setArrow(arrow, origin, force) {
+    const magnitude = force.length();
+    arrow.visible = magnitude > 0.05;
+    if (!arrow.visible) return;
+    arrow.position.copy(origin);
+    arrow.setDirection(force.clone().divideScalar(magnitude));
+    arrow.setLength(Math.min(ARROW_M_PER_N * magnitude, ARROW_MAX) + 0.015, 0.012, 0.008);
+  }
+
+  /** The rest-surface point under the pixel (clientX, clientY) as {theta, z}, or null. */
+  pick(clientX, clientY) {
+    if (!this.restMesh) return null;
+    const r = this.canvas.getBoundingClientRect();
+    const ndc = new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
+    this.raycaster.setFromCamera(ndc, this.camera);
+    const hit = this.raycaster.intersectObject(this.restMesh, false)[0];
+    if (!hit) return null;
+    // theta: angle about the thigh axis from the anterior (+y) towards +x.
+    return { theta: Math.atan2(hit.point.x, hit.point.y), z: hit.point.z };
+  }
+
+  rotate(dx, dy) {
+    this.orbit.azimuth -= dx * 0.008;
+    this.orbit.elevation = Math.min(Math.max(this.orbit.elevation + dy * 0.008, -1.45), 1.45);
+  }
+
+  zoom(factor) {
+    this.orbit.distance = Math.min(Math.max(this.orbit.distance * factor, 0.15), 3);
+  }
+
+  render() {
+    const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
+    if (w === 0 || h === 0) return;
+    const size = `${w}x${h}`;
+    if (this.size !== size) {
+      this.size = size;
+      this.renderer.setSize(w, h, false);
+      this.camera.aspect = w / h;
+      this.camera.updateProjectionMatrix();
+    }
+    const o = this.orbit;
+    this.camera.position.set(
+      this.target.x + o.distance * Math.cos(o.elevation) * Math.sin(o.azimuth),
+      this.target.y + o.distance * Math.sin(o.elevation),
+      this.target.z + o.distance * Math.cos(o.elevation) * Math.cos(o.azimuth));
+    this.camera.lookAt(this.target);
+    this.renderer.render(this.scene, this.camera);
+    this.frames += 1;
+  }
+}

@@ -1,0 +1,205 @@
+// Real-browser test of `echothigh view` (issue 8), run by .ci/browser-test.sh:
+//   ECHOTHIGH_URL=http://127.0.0.1:PORT/ SCREENSHOT_DIR=target/browser-screenshots \
+//     node tests/browser/viewer.test.mjs
+// Opens the page in headless Debian chromium (playwright-core from web/), and
+// checks: the 3D canvas and the image canvas draw non-blank pixels; dragging
+// the probe over the thigh raises the force; the vein state switches; a
+// malformed message gets an error back and the connection stays up; one exam
+// question is answered and scored. Saves screenshots. Exits non-zero on failure.
+import { createRequire } from 'node:module';
+import { mkdirSync, mkdtempSync, rmSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join } from 'node:path';
+
+const require = createRequire(new URL('../../web/package.json', import.meta.url));
+const { chromium } = require('playwright-core');
+
+const url = process.env.ECHOTHIGH_URL;
+const shots = process.env.SCREENSHOT_DIR || 'target/browser-screenshots';
+const executablePath = process.env.CHROMIUM || '/usr/bin/chromium';
+if (!url) throw new Error('set ECHOTHIGH_URL to the URL printed by `echothigh view`');
+mkdirSync(shots, { recursive: true });
+
+const results = [];
+let failHint = null; // a detail shown only on failure
+function check(name, ok, detail = '') {
+  results.push({ name, ok, detail });
+  console.log(`${ok ? 'ok  ' : 'FAIL'} ${name}${detail && (detail !== failHint || !ok) ? ` — ${detail}` : ''}`);
+  if (!ok) throw new Error(`${name}: ${detail}`);
+}
+
+/** Waits until `fn()` (run in the page) is truthy; returns its value. */
+async function until(page, fn, arg, what, timeout = 20000) {
+  try {
+    const handle = await page.waitForFunction(fn, arg, { timeout, polling: 50 });
+    return await handle.jsonValue();
+  } catch (e) {
+    throw new Error(`timed out waiting for ${what}`);
+  }
+}
+
+const forceOf = () => {
+  const s = window.echothigh.state;
+  const n = (v) => Math.hypot(v[0], v[1], v[2]);
+  return s ? { rendered: n(s.rendered_force), physics: n(s.physics_force) } : null;
+};
+
+/** Fraction of the canvas's pixels that differ from its background, and distinct colours. */
+const canvasInk = (id) => {
+  const src = document.getElementById(id);
+  const c = document.createElement('canvas');
+  c.width = src.width; c.height = src.height;
+  const ctx = c.getContext('2d');
+  ctx.drawImage(src, 0, 0);
+  const d = ctx.getImageData(0, 0, c.width, c.height).data;
+  const bg = [d[0], d[1], d[2]];
+  let ink = 0;
+  const colours = new Set();
+  for (let i = 0; i < d.length; i += 4) {
+    if (Math.abs(d[i] - bg[0]) + Math.abs(d[i + 1] - bg[1]) + Math.abs(d[i + 2] - bg[2]) > 24) ink++;
+    if (i % 64 === 0) colours.add((d[i] << 16) | (d[i + 1] << 8) | d[i + 2]);
+  }
+  return { fraction: ink / (d.length / 4), colours: colours.size, width: c.width, height: c.height };
+};
+
+/** A point of the canvas (client pixels) whose ray hits the thigh, near its top middle. */
+const findThigh = () => {
+  const scene = window.echothigh.scene;
+  const r = document.getElementById('scene').getBoundingClientRect();
+  let best = null;
+  for (let fy = 0.2; fy <= 0.8; fy += 0.02) {
+    for (let fx = 0.3; fx <= 0.7; fx += 0.02) {
+      const x = r.left + fx * r.width, y = r.top + fy * r.height;
+      const hit = scene.pick(x, y);
+      if (hit && Math.abs(hit.theta) < 0.6) {
+        const score = Math.abs(hit.z) + Math.abs(hit.theta) * 0.05;
+        if (!best || score < best.score) best = { x, y, score, hit };
+      }
+    }
+  }
+  return best;
+};
+
+const userDataDir = mkdtempSync(join(tmpdir(), 'echothigh-chromium-'));
+// A new, empty profile each run.
+const browser = await chromium.launchPersistentContext(userDataDir, {
+  executablePath,
+  headless: true,
+  viewport: { width: 1440, height: 900 },
+  args: [
+    '--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+    '--disable-background-networking', '--disable-component-update', '--disable-sync',
+    '--use-gl=angle', '--use-angle=swiftshader', '--enable-unsafe-swiftshader',
+    '--disable-background-timer-throttling', '--disable-renderer-backgrounding',
+  ],
+});
+let exitCode = 0;
+let page = null;
+try {
+  page = await browser.newPage();
+  const consoleErrors = [];
+  page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+  page.on('pageerror', (e) => consoleErrors.push(String(e)));
+  await page.goto(url);
+
+  await until(page, () => window.echothigh && window.echothigh.hello && window.echothigh.state,
+    null, 'the hello and first state');
+  await until(page, () => window.echothigh.imageFrames > 0 && window.echothigh.surfaceFrames > 0,
+    null, 'an image frame and a surface frame');
+  failHint = 'no WebGL context (try --use-angle=swiftshader)';
+  check('WebGL 3D view created', await page.evaluate(() => !!window.echothigh.scene), failHint);
+  await page.waitForTimeout(800);
+
+  const scene = await page.evaluate(canvasInk, 'scene');
+  check('3D canvas draws non-blank pixels', scene.fraction > 0.03 && scene.colours > 20,
+    `${(scene.fraction * 100).toFixed(1)} % inked, ${scene.colours} colours, ${scene.width}×${scene.height}`);
+  const echo = await page.evaluate(canvasInk, 'echo');
+  const echoStats = await page.evaluate(() => {
+    const c = document.getElementById('echo');
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    let sum = 0, sq = 0, n = d.length / 4;
+    for (let i = 0; i < d.length; i += 4) { sum += d[i]; sq += d[i] * d[i]; }
+    return { mean: sum / n, std: Math.sqrt(Math.max(sq / n - (sum / n) ** 2, 0)) };
+  });
+  check('image canvas draws non-blank pixels', echoStats.mean > 2 && echoStats.std > 2 && echo.width > 1,
+    `${echo.width}×${echo.height}, mean ${echoStats.mean.toFixed(1)}, std ${echoStats.std.toFixed(1)}`);
+  await page.screenshot({ path: join(shots, '01-loaded.png') });
+
+  // Drag the probe over the thigh, pressing deeper with the wheel.
+  const start = await page.evaluate(findThigh);
+  check('found the thigh under the mouse', !!start, start ? `theta ${start.hit.theta.toFixed(2)} z ${start.hit.z.toFixed(3)}` : 'no hit');
+  const before = await page.evaluate(forceOf);
+  await page.mouse.move(start.x, start.y);
+  await page.mouse.down();
+  for (let i = 1; i <= 10; i++) {
+    await page.mouse.move(start.x + i * 3, start.y, { steps: 2 });
+    await page.waitForTimeout(30);
+  }
+  for (let i = 0; i < 12; i++) {
+    await page.mouse.wheel(0, -100);
+    await page.waitForTimeout(30);
+  }
+  const pressed = await until(page, (f0) => {
+    const s = window.echothigh.state;
+    const n = (v) => Math.hypot(v[0], v[1], v[2]);
+    const f = n(s.physics_force), r = n(s.rendered_force);
+    return f > f0 + 1.0 && r > 0.5 ? { physics: f, rendered: r, depth: window.echothigh.probe.depth } : null;
+  }, before.physics, 'the force to rise under the probe');
+  check('dragging the probe raises the force', true,
+    `|F| ${before.physics.toFixed(2)} → ${pressed.physics.toFixed(2)} N (rendered ${pressed.rendered.toFixed(2)} N) at depth ${(pressed.depth * 1000).toFixed(1)} mm`);
+  await page.waitForTimeout(1500); // let the plot and the image fill in
+  await page.screenshot({ path: join(shots, '02-pressing.png') });
+  await page.mouse.up();
+
+  // Vein state.
+  await page.selectOption('#vein', 'chronic');
+  await until(page, () => window.echothigh.state.vein === 'chronic', null, 'the vein to become chronic');
+  check('switching the vein state reaches the simulation', true, 'chronic');
+  await page.selectOption('#vein', 'healthy');
+  await until(page, () => window.echothigh.state.vein === 'healthy', null, 'the vein to become healthy');
+
+  // A malformed message is answered with an error; the connection stays up.
+  const errorsBefore = await page.evaluate(() => window.echothigh.errors);
+  await page.evaluate(() => window.echothigh.send({ type: 'probe', theta: 0, z: 0, depth: 5, tilt: 0 }));
+  await until(page, (n) => window.echothigh.errors > n, errorsBefore, 'an error message');
+  const t0 = await page.evaluate(() => window.echothigh.state.time);
+  await until(page, (t) => window.echothigh.connected && window.echothigh.state.time > t, t0, 'state after the error');
+  check('a malformed message gets an error and the connection stays up', true,
+    await page.evaluate(() => window.echothigh.lastError));
+
+  // One exam question.
+  await page.click('#exam-start');
+  await until(page, () => window.echothigh.state.exam.open && window.echothigh.state.vein === null,
+    null, 'an open exam question with the vein hidden');
+  check('exam hides the vein state', await page.isDisabled('#vein'));
+  await page.mouse.move(start.x, start.y);
+  await page.mouse.down();
+  await page.mouse.move(start.x + 20, start.y, { steps: 5 });
+  await until(page, () => window.echothigh.state.exam.peak_force > 1.0, null, 'a press during the exam');
+  await page.mouse.up();
+  await page.click('#answer-no');
+  const exam = await until(page, () => {
+    const e = window.echothigh.state.exam;
+    return !e.open && e.last ? e : null;
+  }, null, 'the exam result');
+  const shown = await page.textContent('#exam-result');
+  check('one exam question answered and scored',
+    exam.answered === 1 && exam.correct === (exam.last.correct ? 1 : 0) &&
+      exam.last.correct === (exam.last.truth !== 'healthy') && shown.includes('the vein was'),
+    `${shown} · score ${exam.correct}/${exam.answered}`);
+  await page.screenshot({ path: join(shots, '03-exam.png') });
+
+  const fps = await page.evaluate(() => document.getElementById('st-fps').textContent);
+  const echoFps = await page.evaluate(() => document.getElementById('echo-fps').textContent);
+  console.log(`info 3D view ${fps}, image ${echoFps} (headless, software WebGL)`);
+  check('no errors in the page console', consoleErrors.length === 0, consoleErrors.join(' | '));
+} catch (e) {
+  exitCode = 1;
+  console.error(`FAIL ${e.message}`);
+  if (page) await page.screenshot({ path: join(shots, '99-failure.png') }).catch(() => {});
+} finally {
+  await browser.close();
+  rmSync(userDataDir, { recursive: true, force: true });
+}
+console.log(`${results.filter((r) => r.ok).length} checks passed${exitCode ? ', then a failure' : ''}`);
+process.exit(exitCode);
