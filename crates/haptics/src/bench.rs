@@ -1,8 +1,9 @@
 //! Measurements behind `echothigh bench haptics`: compute time per haptic
 //! tick, per model-manager update, and the loop runner's period error. The
 //! scenario is analytic: a sphere of radius 8 cm (a thigh-sized local
-//! surface), a device pressing 5 mm in while sliding on a 2 cm circle, and
-//! physics samples at 100 Hz (D = −|F|/k in contact, k = 500 N/m).
+//! surface) whose radius breathes by ±1 cm at 0.3 Hz (so every fit has work
+//! to do), a device pressing up to 5 mm in while sliding on a 2 cm circle,
+//! and physics samples at 100 Hz (D = −|F|/k in contact, k = 500 N/m).
 
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -127,13 +128,15 @@ pub fn device_path(t: f64) -> Vec3 {
     dir * (RADIUS - depth)
 }
 
-/// The physics sample an analytic sphere at the origin reports at `p`.
+/// The physics sample an analytic sphere at the origin, of radius
+/// `0.08 + 0.01 sin(2π·0.3 t)` m, reports at `p` (m) and time `t` (s).
 pub fn sphere_sample(p: Vec3, t: f64) -> Sample {
     let rho = p.norm();
+    let radius = RADIUS + 0.01 * (std::f64::consts::TAU * 0.3 * t).sin();
     Sample {
         time: t,
         p,
-        distance: rho - RADIUS,
+        distance: rho - radius,
         gradient: p / rho,
         stiffness: STIFFNESS,
     }

@@ -29,11 +29,19 @@ fn invalid(prefix: &str, field: &str, reason: impl Into<String>) -> ConfigError 
 /// Checks that `value` is finite and `> 0` (or `>= 0` when `allow_zero`).
 fn positive(prefix: &str, field: &str, value: f64, allow_zero: bool) -> Result<(), ConfigError> {
     if !value.is_finite() {
-        return Err(invalid(prefix, field, format!("must be finite, got {value}")));
+        return Err(invalid(
+            prefix,
+            field,
+            format!("must be finite, got {value}"),
+        ));
     }
     if value < 0.0 || (!allow_zero && value == 0.0) {
         let bound = if allow_zero { ">= 0" } else { "> 0" };
-        return Err(invalid(prefix, field, format!("must be {bound}, got {value}")));
+        return Err(invalid(
+            prefix,
+            field,
+            format!("must be {bound}, got {value}"),
+        ));
     }
     Ok(())
 }

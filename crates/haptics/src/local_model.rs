@@ -135,7 +135,8 @@ impl LocalModel for Plane {
     /// `∂φ'/∂n = I`, `∂φ'/∂d = 0` (full rank 4 with the value row).
     fn gradient_du(&self, _x: &Vec3) -> Matrix3x4<f64> {
         let mut j = Matrix3x4::zeros();
-        j.fixed_view_mut::<3, 3>(0, 0).copy_from(&Matrix3::identity());
+        j.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&Matrix3::identity());
         j
     }
     fn is_valid(&self) -> bool {
@@ -227,7 +228,11 @@ mod tests {
             um[k] -= h;
             let (mp, mm) = (m.with_params(&up), m.with_params(&um));
             let fd = (mp.value(&x) - mm.value(&x)) / (2.0 * h);
-            assert!((fd - dv[k]).abs() < 1e-7, "dφ/du[{k}]: fd {fd} vs {}", dv[k]);
+            assert!(
+                (fd - dv[k]).abs() < 1e-7,
+                "dφ/du[{k}]: fd {fd} vs {}",
+                dv[k]
+            );
             let gd = (mp.gradient(&x) - mm.gradient(&x)) / (2.0 * h);
             for i in 0..3 {
                 assert!((gd[i] - dg[(i, k)]).abs() < 1e-6, "dφ'/du[{i},{k}]");

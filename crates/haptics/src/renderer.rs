@@ -191,7 +191,11 @@ impl HapticRenderer {
             return 0;
         }
         if !m.is_usable() {
-            return if m.sequence == 0 { 0 } else { flags::FAULT_MODEL };
+            return if m.sequence == 0 {
+                0
+            } else {
+                flags::FAULT_MODEL
+            };
         }
         if self.model.sequence == 0 || !self.config.shading {
             self.shading = Shading::settled(m.params, m.stiffness);

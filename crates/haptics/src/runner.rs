@@ -143,7 +143,8 @@ pub fn request_realtime_priority() -> bool {
             return true;
         }
     }
-    let fallback = thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Max);
+    let fallback =
+        thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Max);
     if !PRIORITY_WARNED.swap(true, Ordering::Relaxed) {
         tracing::warn!(
             normal_priority_raised = fallback.is_ok(),
@@ -278,7 +279,10 @@ mod tests {
         let mut v: Vec<f64> = (1..=1000).map(|i| i as f64).collect();
         v.reverse();
         let p = Percentiles::of(&mut v);
-        assert_eq!((p.count, p.median, p.p99, p.p999, p.max), (1000, 500.0, 990.0, 999.0, 1000.0));
+        assert_eq!(
+            (p.count, p.median, p.p99, p.p999, p.max),
+            (1000, 500.0, 990.0, 999.0, 1000.0)
+        );
         assert_eq!(Percentiles::of(&mut []).count, 0);
     }
 
@@ -310,7 +314,9 @@ mod tests {
         assert_eq!(n, 20);
         assert_eq!(runner.timings().len(), 16);
         // Tick times are increasing and indices consecutive.
-        assert!(seen.windows(2).all(|w| w[1].0 > w[0].0 && w[1].1 == w[0].1 + 1));
+        assert!(seen
+            .windows(2)
+            .all(|w| w[1].0 > w[0].0 && w[1].1 == w[0].1 + 1));
         // A set flag stops the loop before the first tick.
         stop.store(true, Ordering::Relaxed);
         assert_eq!(runner.run(&stop, None, |_, _| {}), 0);

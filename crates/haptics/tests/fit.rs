@@ -2,8 +2,7 @@
 //! parameters; the newest sample is reproduced; rank deficiency is harmless.
 
 use echothigh_haptics::{
-    handoff, FitConfig, LocalModel, ModelKind, ModelManager, ModelParams, Sample, SampleError,
-    Vec3,
+    handoff, FitConfig, LocalModel, ModelKind, ModelManager, ModelParams, Sample, SampleError, Vec3,
 };
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

@@ -62,7 +62,11 @@ fn check_path(model: ModelParams, mu_s: f64, mu_k: f64, steps: &[(f64, f64, f64)
         let out = *r.output();
         let x = out.proxy;
         let eps = 1e-9;
-        assert!(model.value(&x) >= -eps, "proxy inside: φ = {}", model.value(&x));
+        assert!(
+            model.value(&x) >= -eps,
+            "proxy inside: φ = {}",
+            model.value(&x)
+        );
         if model.value(&p) >= 0.0 {
             assert_eq!(x, p, "free proxy must equal the device");
             assert_eq!(f, Vec3::zeros());
@@ -73,7 +77,10 @@ fn check_path(model: ModelParams, mu_s: f64, mu_k: f64, steps: &[(f64, f64, f64)
             let ft = (f - fn_ * n).norm();
             assert!(fn_ >= -1e-9, "force pulls into the surface");
             if mu_s == 0.0 {
-                assert!(ft <= 1e-9 * fn_ + 1e-9, "frictionless force not normal: {ft} vs {fn_}");
+                assert!(
+                    ft <= 1e-9 * fn_ + 1e-9,
+                    "frictionless force not normal: {ft} vs {fn_}"
+                );
             } else {
                 assert!(
                     ft <= mu_s * fn_ * (1.0 + 1e-6) + 1e-9,
@@ -119,7 +126,10 @@ fn friction_sticks_inside_the_static_cone() {
     for i in 1..=25 {
         r.tick(-n * 0.01 + t1 * (1e-4 * i as f64), t);
         t += DT;
-        assert!((r.output().proxy - stuck).norm() < 1e-12, "proxy moved while in the cone");
+        assert!(
+            (r.output().proxy - stuck).norm() < 1e-12,
+            "proxy moved while in the cone"
+        );
         assert!(!r.output().sliding);
     }
     // Beyond 3 mm it breaks away and trails at the kinetic edge (2 mm).
@@ -128,7 +138,10 @@ fn friction_sticks_inside_the_static_cone() {
     assert!(out.sliding);
     let off = out.proxy - out.device;
     let tangential = (off - off.dot(&n) * n).norm();
-    assert!((tangential - 0.002).abs() < 1e-9, "kinetic edge: {tangential}");
+    assert!(
+        (tangential - 0.002).abs() < 1e-9,
+        "kinetic edge: {tangential}"
+    );
 }
 
 #[test]
@@ -185,7 +198,14 @@ fn rendered_force_matches_physics_force_at_the_sample() {
         r.tick(p, t);
     }
     let f = r.output().force;
-    assert!(last_force.norm() > 5.0, "the test must press: {}", last_force.norm());
+    assert!(
+        last_force.norm() > 5.0,
+        "the test must press: {}",
+        last_force.norm()
+    );
     let rel = (f - last_force).norm() / last_force.norm();
-    assert!(rel < 0.01, "rendered {f:?} vs physics {last_force:?} ({rel})");
+    assert!(
+        rel < 0.01,
+        "rendered {f:?} vs physics {last_force:?} ({rel})"
+    );
 }
