@@ -1,1 +1,40 @@
-//! placeholder
+//! The physical model of the thigh (d'Aulignac, Balaniuk & Laugier, §3):
+//! a two-layer spring–damper mesh — a surface of lumped masses joined by
+//! linear springs `f = a x` with dampers, and nonlinear normal springs
+//! `f(x) = x/(a x + b)` to an inner layer of fixed anchors — integrated with
+//! implicit Euler (Eq. 1), Newton iterations and a preconditioned conjugate
+//! gradient on a 3×3 block-sparse matrix of fixed pattern.
+//!
+//! ```
+//! use echothigh_model::{ModelConfig, NoExtraForce, ThighModel, Vec3};
+//! let mut model = ThighModel::new(&ModelConfig::default()).unwrap();
+//! let top = model.mesh().node_at(std::f64::consts::FRAC_PI_2, 0.0);
+//! model.external_forces_mut()[top] = Vec3::new(0.0, -1.0, 0.0); // 1 N inward
+//! let stats = model.step(0.01, &mut NoExtraForce);
+//! assert!(stats.converged && model.positions()[top].y < model.rest_positions()[top].y);
+//! ```
+//!
+//! Units are SI (m, N, s, kg). Frame: z along the thigh, x lateral, y anterior.
+#![warn(missing_docs)]
+
+pub mod block_sparse;
+pub mod config;
+pub mod force_model;
+pub mod integrator;
+pub mod mesh;
+pub mod pcg;
+pub mod springs;
+pub mod thigh;
+pub mod tissue;
+
+/// A 3-vector of `f64` (m, m/s or N by context).
+pub type Vec3 = nalgebra::Vector3<f64>;
+
+pub use block_sparse::{BlockSparse, PatternError};
+pub use config::{ConfigError, IntegratorParams, ModelConfig, ThighGeometry, TissueParams};
+pub use force_model::{ForceModel, NoExtraForce, SumForce};
+pub use integrator::{Dynamics, ImplicitEuler, StepStats};
+pub use mesh::{Edge, EdgeKind, SurfaceMesh};
+pub use pcg::{Pcg, PcgParams, Preconditioner, SolveStats};
+pub use thigh::{Energy, ThighModel};
+pub use tissue::TissueForces;

@@ -1,0 +1,95 @@
+//! `[integrator]`: implicit Euler (Eq. 1), Newton iterations, PCG.
+
+use super::{in_range, key, positive, ConfigError};
+use crate::pcg::{PcgParams, Preconditioner};
+use serde::{Deserialize, Serialize};
+
+/// Settings of the implicit integrator (paper Eq. 1 with the blend λ) and of
+/// its Newton and PCG solvers.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct IntegratorParams {
+    /// Blend λ ∈ [0, 1] of Eq. 1: 1 = backward Euler, 0 = explicit Euler. Default 1.
+    pub lambda: f64,
+    /// Default physics time step h (s). Default 0.01 (the paper's 100 Hz).
+    pub time_step: f64,
+    /// Newton stops when the residual norm falls below this fraction of its
+    /// value at the step's first iterate (dimensionless). Default 1e-3.
+    pub newton_tol: f64,
+    /// Newton also stops when the residual, as a position error
+    /// `h · max_i |r_i| / m_i`, is below this (m). Default 1e-8.
+    pub newton_abs_tol: f64,
+    /// Cap on Newton iterations (linear solves) per step. Default 8.
+    pub newton_max_iterations: u32,
+    /// PCG relative residual tolerance `|A x − b| ≤ tol · |b|`. Default 1e-4.
+    pub cg_tol: f64,
+    /// Cap on PCG iterations per linear solve. Default 200.
+    pub cg_max_iterations: u32,
+    /// PCG preconditioner. Default `block_jacobi`.
+    pub preconditioner: Preconditioner,
+    /// Asymptote margin `m ∈ (0, 1)`: Newton steps are limited so every normal
+    /// spring's compression stays ≤ `(1 − m) · b/a`. Default 0.05.
+    pub asymptote_margin: f64,
+    /// Keep the geometric stiffness `(f/l)(I − d dᵀ)` of compressed springs
+    /// (`f < 0`) in the Newton matrix. It is negative and can make the
+    /// matrix indefinite (PCG then fails), so by default it is dropped for
+    /// compressed springs only (Choi & Ko 2002); the residual stays exact.
+    /// Default false.
+    pub geometric_stiffness_in_compression: bool,
+}
+
+impl Default for IntegratorParams {
+    fn default() -> Self {
+        IntegratorParams {
+            lambda: 1.0,
+            time_step: 0.01,
+            newton_tol: 1e-3,
+            newton_abs_tol: 1e-8,
+            newton_max_iterations: 8,
+            cg_tol: 1e-4,
+            cg_max_iterations: 200,
+            preconditioner: Preconditioner::BlockJacobi,
+            asymptote_margin: 0.05,
+            geometric_stiffness_in_compression: false,
+        }
+    }
+}
+
+impl IntegratorParams {
+    /// The PCG settings.
+    pub fn pcg(&self) -> PcgParams {
+        PcgParams {
+            tol: self.cg_tol,
+            max_iterations: self.cg_max_iterations,
+            preconditioner: self.preconditioner,
+        }
+    }
+
+    /// Validates every field; errors name `{prefix}.{field}`.
+    pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
+        in_range(prefix, "lambda", self.lambda, 0.0, 1.0)?;
+        positive(prefix, "time_step", self.time_step)?;
+        positive(prefix, "newton_tol", self.newton_tol)?;
+        positive(prefix, "newton_abs_tol", self.newton_abs_tol)?;
+        if self.newton_max_iterations == 0 {
+            return Err(ConfigError::invalid(
+                key(prefix, "newton_max_iterations"),
+                "must be >= 1, got 0",
+            ));
+        }
+        positive(prefix, "cg_tol", self.cg_tol)?;
+        if self.cg_max_iterations == 0 {
+            return Err(ConfigError::invalid(
+                key(prefix, "cg_max_iterations"),
+                "must be >= 1, got 0",
+            ));
+        }
+        if !(self.asymptote_margin > 0.0 && self.asymptote_margin < 1.0) {
+            return Err(ConfigError::invalid(
+                key(prefix, "asymptote_margin"),
+                format!("must be in (0, 1), got {}", self.asymptote_margin),
+            ));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,153 @@
+//! Configuration of the physical model: the `[thigh]`, `[tissue]` and
+//! `[integrator]` sections of a scenario file.
+//!
+//! Every struct is `serde` (de)serializable with `deny_unknown_fields` and
+//! defaults for every field, so each can be embedded as a field of a larger
+//! scenario struct. [`ModelConfig`] bundles the three and checks the
+//! constraints that span sections (the normal springs' asymptote must be
+//! shorter than their rest length).
+
+mod geometry;
+mod integrator;
+mod tissue;
+
+pub use geometry::ThighGeometry;
+pub use integrator::IntegratorParams;
+pub use tissue::TissueParams;
+
+use serde::{Deserialize, Serialize};
+
+/// An invalid configuration: names the offending key.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ConfigError {
+    /// A value is out of its allowed range (message names the key and the value).
+    #[error("{key} {message}")]
+    Invalid {
+        /// Dotted key, e.g. `tissue.areal_density`.
+        key: String,
+        /// What is wrong, e.g. `must be > 0, got -1`.
+        message: String,
+    },
+    /// The TOML text could not be parsed (unknown key, wrong type, syntax).
+    #[error("invalid model configuration: {0}")]
+    Parse(String),
+}
+
+impl ConfigError {
+    /// An [`ConfigError::Invalid`] for `key`.
+    pub fn invalid(key: impl Into<String>, message: impl Into<String>) -> Self {
+        ConfigError::Invalid {
+            key: key.into(),
+            message: message.into(),
+        }
+    }
+}
+
+/// Joins a prefix and a field name into a dotted key (`""` + `a` = `a`).
+pub(crate) fn key(prefix: &str, field: &str) -> String {
+    if prefix.is_empty() {
+        field.to_string()
+    } else {
+        format!("{prefix}.{field}")
+    }
+}
+
+/// Checks `value > 0` and finite.
+pub(crate) fn positive(prefix: &str, field: &str, value: f64) -> Result<(), ConfigError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(ConfigError::invalid(
+            key(prefix, field),
+            format!("must be finite and > 0, got {value}"),
+        ))
+    }
+}
+
+/// Checks `value >= 0` and finite.
+pub(crate) fn non_negative(prefix: &str, field: &str, value: f64) -> Result<(), ConfigError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(ConfigError::invalid(
+            key(prefix, field),
+            format!("must be finite and >= 0, got {value}"),
+        ))
+    }
+}
+
+/// Checks `lo <= value <= hi` (NaN fails).
+pub(crate) fn in_range(
+    prefix: &str,
+    field: &str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+) -> Result<(), ConfigError> {
+    if value >= lo && value <= hi {
+        Ok(())
+    } else {
+        Err(ConfigError::invalid(
+            key(prefix, field),
+            format!("must be in [{lo}, {hi}], got {value}"),
+        ))
+    }
+}
+
+/// The physical model's whole configuration: `[thigh]`, `[tissue]`, `[integrator]`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ModelConfig {
+    /// Geometry and mesh resolution.
+    pub thigh: ThighGeometry,
+    /// Masses, springs and dampers.
+    pub tissue: TissueParams,
+    /// Implicit Euler, Newton and PCG settings.
+    pub integrator: IntegratorParams,
+}
+
+impl ModelConfig {
+    /// Parses a TOML document with optional `[thigh]`, `[tissue]`,
+    /// `[integrator]` tables (missing keys take their defaults) and validates it.
+    pub fn from_toml_str(text: &str) -> Result<Self, ConfigError> {
+        let config: ModelConfig =
+            toml::from_str(text).map_err(|e| ConfigError::Parse(e.to_string()))?;
+        config.validate("")?;
+        Ok(config)
+    }
+
+    /// Validates every section (keys `{prefix}.thigh.*`, ...) and the
+    /// cross-section constraint `tissue.normal_b / tissue.normal_a <
+    /// thigh.tissue_thickness` (the asymptote of the normal springs must be
+    /// reachable only by compressing less than their rest length).
+    pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
+        let thigh = key(prefix, "thigh");
+        let tissue = key(prefix, "tissue");
+        self.thigh.validate(&thigh)?;
+        self.tissue.validate(&tissue)?;
+        self.integrator.validate(&key(prefix, "integrator"))?;
+        check_asymptote(&self.thigh, &self.tissue, &tissue)
+    }
+}
+
+/// Checks that the normal springs' asymptote `b/a` (m) is shorter than their
+/// rest length `thigh.tissue_thickness`; the error names `{tissue_prefix}.normal_b`.
+pub fn check_asymptote(
+    thigh: &ThighGeometry,
+    tissue: &TissueParams,
+    tissue_prefix: &str,
+) -> Result<(), ConfigError> {
+    let asymptote = tissue.normal_b / tissue.normal_a;
+    if asymptote < thigh.tissue_thickness {
+        Ok(())
+    } else {
+        Err(ConfigError::invalid(
+            key(tissue_prefix, "normal_b"),
+            format!(
+                "gives an asymptote normal_b/normal_a = {asymptote} m that must be < \
+                 thigh.tissue_thickness = {} m (the normal spring's rest length)",
+                thigh.tissue_thickness
+            ),
+        ))
+    }
+}

@@ -1,0 +1,71 @@
+//! The seam through which force models enter the implicit system (SOFA's
+//! habit): each answers its force and its Jacobians, so the integrator never
+//! special-cases a spring type. Contact implements it.
+
+use crate::block_sparse::BlockSparse;
+use crate::Vec3;
+
+/// A force on the mesh nodes and its Jacobians.
+///
+/// Methods take `&mut self` so a model can refresh internal state (e.g.
+/// contact detection) at every Newton iterate. Each is called with the same
+/// `x` (m) and `v` (m/s) of one iterate: `add_forces` first, then, if the
+/// iterate needs a linear solve, `add_jacobians`.
+pub trait ForceModel {
+    /// Adds this model's force on every node (N) into `f` (`f.len() == x.len()`).
+    fn add_forces(&mut self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]);
+
+    /// Adds `∂F/∂x` (N/m) into `k` and `∂F/∂v` (N·s/m) into `b`; only blocks
+    /// of the fixed pattern (the diagonal and the mesh edges) may be written.
+    fn add_jacobians(&mut self, x: &[Vec3], v: &[Vec3], k: &mut BlockSparse, b: &mut BlockSparse);
+
+    /// Largest fraction `α ∈ [0, 1]` of the position change `dx` (m) from `x`
+    /// that keeps this model in its valid domain along the whole path
+    /// `x + s·dx, s ∈ [0, α]` (e.g. below a spring's asymptote). Default 1.
+    fn max_step_fraction(&self, x: &[Vec3], dx: &[Vec3]) -> f64 {
+        let _ = (x, dx);
+        1.0
+    }
+}
+
+/// No extra force: the tissue alone.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct NoExtraForce;
+
+impl ForceModel for NoExtraForce {
+    fn add_forces(&mut self, _x: &[Vec3], _v: &[Vec3], _f: &mut [Vec3]) {}
+    fn add_jacobians(
+        &mut self,
+        _x: &[Vec3],
+        _v: &[Vec3],
+        _k: &mut BlockSparse,
+        _b: &mut BlockSparse,
+    ) {
+    }
+}
+
+/// The sum of two force models (e.g. tissue + contact).
+pub struct SumForce<'a> {
+    /// First model.
+    pub first: &'a mut dyn ForceModel,
+    /// Second model.
+    pub second: &'a mut dyn ForceModel,
+}
+
+impl ForceModel for SumForce<'_> {
+    fn add_forces(&mut self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
+        self.first.add_forces(x, v, f);
+        self.second.add_forces(x, v, f);
+    }
+
+    fn add_jacobians(&mut self, x: &[Vec3], v: &[Vec3], k: &mut BlockSparse, b: &mut BlockSparse) {
+        self.first.add_jacobians(x, v, k, b);
+        self.second.add_jacobians(x, v, k, b);
+    }
+
+    fn max_step_fraction(&self, x: &[Vec3], dx: &[Vec3]) -> f64 {
+        self.first
+            .max_step_fraction(x, dx)
+            .min(self.second.max_step_fraction(x, dx))
+    }
+}

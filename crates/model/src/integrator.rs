@@ -1,0 +1,343 @@
+//! Implicit integration of the paper's Eq. 1 in the symmetric velocity form,
+//! with Newton iterations and an asymptote step limiter.
+//!
+//! # The system
+//! With `h` the step, `M` the lumped masses, `F(x, v)` the total force and
+//! the blend `λ ∈ [0, 1]` of Eq. 1, the step is
+//!
+//! `Δx = h (v₀ + λ Δv)`, `M Δv = h F(x₀ + λ Δx, v₀ + λ Δv)`.
+//!
+//! `λ = 1` is backward Euler; `λ = 0` is explicit Euler (`x₁ = x₀ + h v₀`,
+//! `v₁ = v₀ + h M⁻¹ F(x₀, v₀)`). Substituting `Δx` gives one equation in
+//! `Δv`, the residual
+//!
+//! `R(Δv) = h F(x₀ + λ h (v₀ + λ Δv), v₀ + λ Δv) − M Δv = 0`,
+//!
+//! whose Jacobian is `−(M − λ h B − λ² h² K)` with `K = ∂F/∂x`, `B = ∂F/∂v`.
+//! Newton's step `δ` thus solves the symmetric system
+//!
+//! `(M − λ h B − λ² h² K) δ = R(Δv)`.
+//!
+//! Linearizing `F` about `(x₀, v₀)` at `Δv = 0` gives DESIGN.md's
+//! `(M − λ h B − λ² h² K) Δv = h F₀ + λ h² K v₀`: the paper's single linear
+//! solve is the first Newton iterate. Near the normal springs' asymptote one
+//! solve is not enough (a 10 ms step can throw a node past `b/a`), so Newton
+//! iterates, each solve by PCG (warm-started with the previous step's first
+//! correction), and each update is cut to the largest fraction that keeps
+//! every force model in its domain ([`ForceModel::max_step_fraction`]),
+//! checked on both the evaluation point `x₀ + λ Δx` and the end point
+//! `x₀ + Δx`. The start `Δv = 0` is also checked: if `x₀ + h v₀` leaves the
+//! domain, Newton starts from `Δv = −(1 − α) v₀ / λ` (end point `x₀ + α h v₀`).
+//! With `λ = 0` positions do not depend on `Δv` and nothing can be limited.
+//!
+//! `K` omits the damper's `∂F/∂x` (not symmetric); Newton stays exact in the
+//! residual and converges, at worst linearly while the dampers work hard.
+
+use crate::block_sparse::BlockSparse;
+use crate::config::IntegratorParams;
+use crate::force_model::ForceModel;
+use crate::pcg::{Pcg, SolveStats};
+use crate::Vec3;
+use serde::{Deserialize, Serialize};
+
+/// What one step did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct StepStats {
+    /// Newton iterations (linear solves) taken.
+    pub newton_iterations: u32,
+    /// Total PCG iterations over the step's linear solves.
+    pub cg_iterations: u32,
+    /// Relative residual of the last PCG solve.
+    pub cg_residual: f64,
+    /// Final Newton residual relative to the step's first one.
+    pub newton_residual: f64,
+    /// Times the asymptote limiter cut a Newton update (or the start).
+    pub limited: u32,
+    /// True if Newton met its tolerance within the cap.
+    pub converged: bool,
+    /// False if the step produced a non-finite state; the state was then
+    /// restored to the step's start (or `h` was not a positive finite number).
+    pub finite: bool,
+}
+
+/// The mutable state and the constant data of a system being stepped.
+pub struct Dynamics<'a> {
+    /// Positions (m), updated in place.
+    pub x: &'a mut [Vec3],
+    /// Velocities (m/s), updated in place.
+    pub v: &'a mut [Vec3],
+    /// Lumped masses (kg), all > 0.
+    pub mass: &'a [f64],
+    /// Dirichlet flags: fixed nodes keep their position, zero velocity.
+    pub fixed: &'a [bool],
+    /// Constant external force per node during the step (N).
+    pub external: &'a [Vec3],
+    /// Gravity acceleration (m/s²), applied as `m g`.
+    pub gravity: Vec3,
+}
+
+/// Implicit Euler with Newton and PCG; owns only scratch memory.
+#[derive(Debug, Clone)]
+pub struct ImplicitEuler {
+    k: BlockSparse,
+    b: BlockSparse,
+    a: BlockSparse,
+    pcg: Pcg,
+    x0: Vec<Vec3>,
+    v0: Vec<Vec3>,
+    dv: Vec<Vec3>,
+    delta: Vec<Vec3>,
+    warm: Vec<Vec3>,
+    f: Vec<Vec3>,
+    r: Vec<Vec3>,
+    x_eval: Vec<Vec3>,
+    v_eval: Vec<Vec3>,
+    path: Vec<Vec3>,
+    zero_diag: Vec<f64>,
+}
+
+/// `v[i] = 0` where `fixed[i]`.
+pub(crate) fn filter(v: &mut [Vec3], fixed: &[bool]) {
+    for (vi, &f) in v.iter_mut().zip(fixed) {
+        if f {
+            *vi = Vec3::zeros();
+        }
+    }
+}
+
+impl ImplicitEuler {
+    /// Scratch for systems with the block pattern of `pattern` (allocates once).
+    pub fn new(pattern: &BlockSparse) -> Self {
+        let n = pattern.n();
+        let mut zero = pattern.clone();
+        zero.clear();
+        let vecs = || vec![Vec3::zeros(); n];
+        ImplicitEuler {
+            k: zero.clone(),
+            b: zero.clone(),
+            a: zero,
+            pcg: Pcg::new(n),
+            x0: vecs(),
+            v0: vecs(),
+            dv: vecs(),
+            delta: vecs(),
+            warm: vecs(),
+            f: vecs(),
+            r: vecs(),
+            x_eval: vecs(),
+            v_eval: vecs(),
+            path: vecs(),
+            zero_diag: vec![0.0; n],
+        }
+    }
+
+    /// Forgets the warm start (after a reset of the state).
+    pub fn reset(&mut self) {
+        self.warm.fill(Vec3::zeros());
+    }
+
+    /// Advances `sys` by `h` (s) under `forces` (Eq. 1, see the module docs).
+    /// Allocates nothing.
+    pub fn step(
+        &mut self,
+        sys: Dynamics<'_>,
+        h: f64,
+        params: &IntegratorParams,
+        forces: &mut dyn ForceModel,
+    ) -> StepStats {
+        let mut stats = StepStats::default();
+        if !(h.is_finite() && h > 0.0) {
+            return stats;
+        }
+        let lambda = params.lambda;
+        let pcg = params.pcg();
+        self.x0.copy_from_slice(sys.x);
+        self.v0.copy_from_slice(sys.v);
+        filter(&mut self.v0, sys.fixed);
+        self.dv.fill(Vec3::zeros());
+        if lambda > 0.0 {
+            self.safe_start(h, lambda, sys.fixed, forces, &mut stats);
+        }
+        let mut r_first = 0.0;
+        for it in 0..=params.newton_max_iterations {
+            self.evaluate(&sys, h, lambda, forces);
+            let r_norm = self.r.iter().map(|r| r.norm_squared()).sum::<f64>().sqrt();
+            let pos_err = h * self
+                .r
+                .iter()
+                .zip(sys.mass)
+                .map(|(r, m)| r.amax() / m)
+                .fold(0.0, f64::max);
+            if it == 0 {
+                r_first = r_norm;
+            }
+            stats.newton_residual = if r_first > 0.0 { r_norm / r_first } else { 0.0 };
+            if stats.newton_residual <= params.newton_tol || pos_err <= params.newton_abs_tol {
+                stats.converged = true;
+                break;
+            }
+            if it == params.newton_max_iterations || !r_norm.is_finite() {
+                break;
+            }
+            let solve = self.newton_solve(&sys, h, lambda, it == 0, &pcg, forces);
+            stats.newton_iterations += 1;
+            stats.cg_iterations += solve.iterations;
+            stats.cg_residual = solve.residual;
+            self.limit_and_update(h, lambda, forces, &mut stats);
+        }
+        // Commit: v₁ = v₀ + Δv, x₁ = x₀ + h (v₀ + λ Δv).
+        for i in 0..sys.x.len() {
+            sys.v[i] = self.v0[i] + self.dv[i];
+            sys.x[i] = self.x0[i] + h * (self.v0[i] + lambda * self.dv[i]);
+        }
+        stats.finite = sys
+            .x
+            .iter()
+            .chain(sys.v.iter())
+            .all(|p| p.iter().all(|c| c.is_finite()));
+        if !stats.finite {
+            sys.x.copy_from_slice(&self.x0);
+            sys.v.copy_from_slice(&self.v0);
+            self.warm.fill(Vec3::zeros());
+        }
+        stats
+    }
+
+    /// Starts Newton inside the force models' domain (see module docs).
+    fn safe_start(
+        &mut self,
+        h: f64,
+        lambda: f64,
+        fixed: &[bool],
+        forces: &dyn ForceModel,
+        stats: &mut StepStats,
+    ) {
+        for (p, v) in self.path.iter_mut().zip(&self.v0) {
+            *p = v * h;
+        }
+        filter(&mut self.path, fixed);
+        let alpha = forces.max_step_fraction(&self.x0, &self.path);
+        if alpha < 1.0 {
+            stats.limited += 1;
+            let s = -(1.0 - alpha) / lambda;
+            for (dv, v) in self.dv.iter_mut().zip(&self.v0) {
+                *dv = v * s;
+            }
+        }
+    }
+
+    /// Evaluation point, total force and residual `r = S (h F − M Δv)`.
+    fn evaluate(&mut self, sys: &Dynamics<'_>, h: f64, lambda: f64, forces: &mut dyn ForceModel) {
+        for i in 0..self.x0.len() {
+            self.v_eval[i] = self.v0[i] + lambda * self.dv[i];
+            self.x_eval[i] = self.x0[i] + lambda * h * self.v_eval[i];
+            self.f[i] = sys.external[i] + sys.gravity * sys.mass[i];
+        }
+        forces.add_forces(&self.x_eval, &self.v_eval, &mut self.f);
+        for i in 0..self.x0.len() {
+            self.r[i] = if sys.fixed[i] {
+                Vec3::zeros()
+            } else {
+                self.f[i] * h - self.dv[i] * sys.mass[i]
+            };
+        }
+    }
+
+    /// Assembles `M − λ h B − λ² h² K` at the evaluation point and solves for δ.
+    fn newton_solve(
+        &mut self,
+        sys: &Dynamics<'_>,
+        h: f64,
+        lambda: f64,
+        first: bool,
+        pcg: &crate::pcg::PcgParams,
+        forces: &mut dyn ForceModel,
+    ) -> SolveStats {
+        self.k.clear();
+        self.b.clear();
+        forces.add_jacobians(&self.x_eval, &self.v_eval, &mut self.k, &mut self.b);
+        let (ck, cb) = (-lambda * lambda * h * h, -lambda * h);
+        self.a.set_combination(ck, &self.k, cb, &self.b, sys.mass);
+        if first {
+            self.delta.copy_from_slice(&self.warm);
+        } else {
+            self.delta.fill(Vec3::zeros());
+        }
+        let solve = self
+            .pcg
+            .solve(&self.a, &self.r, &mut self.delta, sys.fixed, pcg);
+        if first {
+            self.warm.copy_from_slice(&self.delta);
+        }
+        solve
+    }
+
+    /// Cuts δ to stay in the domain at both the evaluation and the end point, then `Δv += α δ`.
+    fn limit_and_update(
+        &mut self,
+        h: f64,
+        lambda: f64,
+        forces: &dyn ForceModel,
+        stats: &mut StepStats,
+    ) {
+        let mut alpha = 1.0f64;
+        if lambda > 0.0 {
+            for (p, d) in self.path.iter_mut().zip(&self.delta) {
+                *p = d * (lambda * lambda * h);
+            }
+            alpha = alpha.min(forces.max_step_fraction(&self.x_eval, &self.path));
+            for i in 0..self.x0.len() {
+                // End point x₀ + h (v₀ + λ Δv), reusing x_eval as scratch.
+                self.x_eval[i] = self.x0[i] + h * (self.v0[i] + lambda * self.dv[i]);
+                self.path[i] = self.delta[i] * (lambda * h);
+            }
+            alpha = alpha.min(forces.max_step_fraction(&self.x_eval, &self.path));
+        }
+        if alpha < 1.0 {
+            stats.limited += 1;
+        }
+        for (dv, d) in self.dv.iter_mut().zip(&self.delta) {
+            *dv += d * alpha;
+        }
+    }
+
+    /// Solves `S (−K) S δx = S rhs` at `(x, v)`: the quasi-static stiffness
+    /// system, `K = ∂F/∂x` (N/m) of `forces`, `rhs` in N, `out` (m) is both
+    /// the warm start and the result; fixed nodes get zero. Allocates nothing.
+    /// `−K` must be positive definite on the free nodes (true with held
+    /// ends; with free ends rigid motions of the skin are zero modes).
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_stiffness(
+        &mut self,
+        x: &[Vec3],
+        v: &[Vec3],
+        fixed: &[bool],
+        forces: &mut dyn ForceModel,
+        params: &IntegratorParams,
+        rhs: &[Vec3],
+        out: &mut [Vec3],
+    ) -> SolveStats {
+        self.k.clear();
+        self.b.clear();
+        forces.add_jacobians(x, v, &mut self.k, &mut self.b);
+        self.zero_diag.fill(0.0);
+        self.a
+            .set_combination(-1.0, &self.k, 0.0, &self.b, &self.zero_diag);
+        self.pcg.solve(&self.a, rhs, out, fixed, &params.pcg())
+    }
+
+    /// The last assembled `K = ∂F/∂x` (N/m), for diagnostics and tests.
+    pub fn stiffness(&self) -> &BlockSparse {
+        &self.k
+    }
+
+    /// The last assembled `B = ∂F/∂v` (N·s/m), for diagnostics and tests.
+    pub fn damping(&self) -> &BlockSparse {
+        &self.b
+    }
+
+    /// The last assembled system matrix (`M − λhB − λ²h²K` or `−K`).
+    pub fn system_matrix(&self) -> &BlockSparse {
+        &self.a
+    }
+}

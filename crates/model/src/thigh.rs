@@ -1,0 +1,280 @@
+//! The physical model of the thigh (paper §3): mesh, tissue, state,
+//! external forces and the implicit integrator, stepped as a short list of
+//! named stages.
+
+use crate::block_sparse::BlockSparse;
+use crate::config::{ConfigError, ModelConfig};
+use crate::force_model::{ForceModel, SumForce};
+use crate::integrator::{filter, Dynamics, ImplicitEuler, StepStats};
+use crate::mesh::SurfaceMesh;
+use crate::pcg::SolveStats;
+use crate::tissue::TissueForces;
+use crate::Vec3;
+
+/// Mechanical energy of the model (J).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Energy {
+    /// `½ Σ m v²`.
+    pub kinetic: f64,
+    /// Elastic energy of all springs (infinite past a normal spring's asymptote).
+    pub elastic: f64,
+    /// `−Σ m g·x` (zero without gravity).
+    pub gravitational: f64,
+}
+
+impl Energy {
+    /// Sum of the three terms.
+    pub fn total(&self) -> f64 {
+        self.kinetic + self.elastic + self.gravitational
+    }
+}
+
+/// The thigh: owns mesh, parameters, state, external forces and scratch.
+#[derive(Debug, Clone)]
+pub struct ThighModel {
+    config: ModelConfig,
+    mesh: SurfaceMesh,
+    tissue: TissueForces,
+    integrator: ImplicitEuler,
+    pattern: BlockSparse,
+    mass: Vec<f64>,
+    x: Vec<Vec3>,
+    v: Vec<Vec3>,
+    external: Vec<Vec3>,
+    time: f64,
+    last: StepStats,
+}
+
+impl ThighModel {
+    /// Validates `config` (errors name the key) and builds the model at rest.
+    pub fn new(config: &ModelConfig) -> Result<Self, ConfigError> {
+        config.validate("")?;
+        let mesh = SurfaceMesh::new(&config.thigh)?;
+        let pattern = BlockSparse::from_pairs(mesh.node_count(), mesh.coupled_pairs());
+        let ip = &config.integrator;
+        let tissue = TissueForces::new(
+            &mesh,
+            &config.tissue,
+            &pattern,
+            ip.asymptote_margin,
+            ip.geometric_stiffness_in_compression,
+        );
+        let mass = mesh
+            .areas()
+            .iter()
+            .map(|a| a * config.tissue.areal_density)
+            .collect();
+        let n = mesh.node_count();
+        Ok(ThighModel {
+            config: config.clone(),
+            integrator: ImplicitEuler::new(&pattern),
+            x: mesh.rest_positions().to_vec(),
+            v: vec![Vec3::zeros(); n],
+            external: vec![Vec3::zeros(); n],
+            mesh,
+            tissue,
+            pattern,
+            mass,
+            time: 0.0,
+            last: StepStats::default(),
+        })
+    }
+
+    /// Advances the model by `h` (s) with the tissue forces plus `extra`
+    /// (e.g. the probe contact) and the external forces: implicit Euler,
+    /// Eq. 1 (see [`crate::integrator`]). Allocates nothing.
+    pub fn step(&mut self, h: f64, extra: &mut dyn ForceModel) -> StepStats {
+        let mut forces = SumForce {
+            first: &mut self.tissue,
+            second: extra,
+        };
+        let sys = Dynamics {
+            x: &mut self.x,
+            v: &mut self.v,
+            mass: &self.mass,
+            fixed: self.mesh.fixed(),
+            external: &self.external,
+            gravity: Vec3::from(self.config.tissue.gravity),
+        };
+        let stats = self
+            .integrator
+            .step(sys, h, &self.config.integrator, &mut forces);
+        if stats.finite {
+            self.time += h;
+        }
+        self.last = stats;
+        stats
+    }
+
+    /// Solves `(−∂F/∂x) δx = rhs` at the current state, tissue + `extra`,
+    /// Dirichlet-filtered: `rhs` in N, `out` in m (warm start and result).
+    /// Contact uses it for the quasi-static local stiffness (a Schur
+    /// complement: `k = 1 / (nᵀ (−K)⁻¹ n)` for a unit load pattern `n`).
+    /// Allocates nothing.
+    ///
+    /// # Panics
+    /// If `rhs` or `out` is not of length [`Self::node_count`].
+    pub fn solve_stiffness(
+        &mut self,
+        extra: &mut dyn ForceModel,
+        rhs: &[Vec3],
+        out: &mut [Vec3],
+    ) -> SolveStats {
+        let mut forces = SumForce {
+            first: &mut self.tissue,
+            second: extra,
+        };
+        self.integrator.solve_stiffness(
+            &self.x,
+            &self.v,
+            self.mesh.fixed(),
+            &mut forces,
+            &self.config.integrator,
+            rhs,
+            out,
+        )
+    }
+
+    /// Total force on every node at the current state (N): tissue + `extra`
+    /// + external + gravity; fixed nodes included (their reaction).
+    pub fn forces(&mut self, extra: &mut dyn ForceModel, f: &mut [Vec3]) {
+        let g = Vec3::from(self.config.tissue.gravity);
+        for ((fi, e), m) in f.iter_mut().zip(&self.external).zip(&self.mass) {
+            *fi = e + g * *m;
+        }
+        self.tissue.add_forces(&self.x, &self.v, f);
+        extra.add_forces(&self.x, &self.v, f);
+    }
+
+    /// Assembles `K = ∂F/∂x` (N/m) and `B = ∂F/∂v` (N·s/m) of tissue +
+    /// `extra` at the current state into `k` and `b` (cleared first; both of
+    /// the pattern of [`Self::pattern`]).
+    pub fn jacobians(
+        &mut self,
+        extra: &mut dyn ForceModel,
+        k: &mut BlockSparse,
+        b: &mut BlockSparse,
+    ) {
+        k.clear();
+        b.clear();
+        self.tissue.add_jacobians(&self.x, &self.v, k, b);
+        extra.add_jacobians(&self.x, &self.v, k, b);
+    }
+
+    /// Back to rest: rest positions, zero velocities, zero external forces, time 0.
+    pub fn reset(&mut self) {
+        self.x.copy_from_slice(self.mesh.rest_positions());
+        self.v.fill(Vec3::zeros());
+        self.external.fill(Vec3::zeros());
+        self.integrator.reset();
+        self.time = 0.0;
+        self.last = StepStats::default();
+    }
+
+    /// Sets positions (m) and velocities (m/s); fixed nodes keep their rest
+    /// position and zero velocity. Lengths must equal [`Self::node_count`].
+    ///
+    /// # Panics
+    /// On a length mismatch.
+    pub fn set_state(&mut self, x: &[Vec3], v: &[Vec3]) {
+        self.x.copy_from_slice(x);
+        self.v.copy_from_slice(v);
+        for (i, &f) in self.mesh.fixed().iter().enumerate() {
+            if f {
+                self.x[i] = self.mesh.rest_positions()[i];
+            }
+        }
+        filter(&mut self.v, self.mesh.fixed());
+    }
+
+    /// Energy at the current state (J).
+    pub fn energy(&self) -> Energy {
+        let g = Vec3::from(self.config.tissue.gravity);
+        let mut e = Energy {
+            elastic: self.tissue.potential_energy(&self.x),
+            ..Energy::default()
+        };
+        for ((x, v), m) in self.x.iter().zip(&self.v).zip(&self.mass) {
+            e.kinetic += 0.5 * m * v.norm_squared();
+            e.gravitational -= m * g.dot(x);
+        }
+        e
+    }
+
+    /// Largest ratio of a normal spring's compression to its asymptote `b/a`
+    /// (< 1 always while the limiter holds; ≤ 1 − margin after Newton updates).
+    pub fn max_asymptote_ratio(&self) -> f64 {
+        self.tissue.max_asymptote_ratio(&self.x)
+    }
+
+    /// Number of nodes.
+    pub fn node_count(&self) -> usize {
+        self.x.len()
+    }
+
+    /// Current positions (m).
+    pub fn positions(&self) -> &[Vec3] {
+        &self.x
+    }
+
+    /// Current velocities (m/s).
+    pub fn velocities(&self) -> &[Vec3] {
+        &self.v
+    }
+
+    /// Rest positions (m).
+    pub fn rest_positions(&self) -> &[Vec3] {
+        self.mesh.rest_positions()
+    }
+
+    /// Anchors of the normal springs (m).
+    pub fn anchors(&self) -> &[Vec3] {
+        self.mesh.anchors()
+    }
+
+    /// Lumped node masses (kg).
+    pub fn masses(&self) -> &[f64] {
+        &self.mass
+    }
+
+    /// Dirichlet flags (held nodes).
+    pub fn fixed(&self) -> &[bool] {
+        self.mesh.fixed()
+    }
+
+    /// External forces (N), constant over a step; set them before [`Self::step`].
+    pub fn external_forces(&self) -> &[Vec3] {
+        &self.external
+    }
+
+    /// External forces (N), mutable.
+    pub fn external_forces_mut(&mut self) -> &mut [Vec3] {
+        &mut self.external
+    }
+
+    /// The surface mesh (rest geometry, areas, normals, triangles, grid indices).
+    pub fn mesh(&self) -> &SurfaceMesh {
+        &self.mesh
+    }
+
+    /// The configuration the model was built with.
+    pub fn config(&self) -> &ModelConfig {
+        &self.config
+    }
+
+    /// The block pattern of `K` and `B` (values zero); clone it to assemble
+    /// matrices for this model.
+    pub fn pattern(&self) -> &BlockSparse {
+        &self.pattern
+    }
+
+    /// Simulated time (s): the sum of the successful steps.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Statistics of the last step.
+    pub fn last_stats(&self) -> StepStats {
+        self.last
+    }
+}

@@ -1,0 +1,249 @@
+//! The two-layer tissue of the paper (§3, Fig. 2) as a [`ForceModel`]:
+//! linear springs with dampers along the mesh edges, and a nonlinear normal
+//! spring with a damper from every surface node to its fixed anchor.
+//!
+//! Parameters are converted once from the resolution-independent
+//! [`TissueParams`] (see its docs) to per-spring values; the block indices
+//! each spring writes are cached so assembly allocates nothing and searches
+//! nothing.
+
+use crate::block_sparse::BlockSparse;
+use crate::config::TissueParams;
+use crate::force_model::ForceModel;
+use crate::mesh::{EdgeKind, SurfaceMesh};
+use crate::springs::{
+    damper_force, damper_jacobian, linear_force, normal_energy, normal_force, normal_stiffness,
+    spring_force, spring_force_jacobian,
+};
+use crate::Vec3;
+
+/// A linear spring `f = a x` with a damper `c`, between nodes `i` and `j`.
+#[derive(Debug, Clone, Copy)]
+struct LinearSpring {
+    i: usize,
+    j: usize,
+    rest: f64,
+    a: f64,
+    c: f64,
+    /// Storage indices of blocks (i,i), (i,j), (j,i), (j,j).
+    blocks: [usize; 4],
+}
+
+/// A nonlinear normal spring `f = x/(a x + b)` with a damper `c`, node → anchor.
+#[derive(Debug, Clone, Copy)]
+struct NormalSpring {
+    node: usize,
+    anchor: Vec3,
+    rest: f64,
+    a: f64,
+    b: f64,
+    c: f64,
+    /// Smallest length allowed to a Newton iterate: `rest − (1 − margin) b/a`.
+    min_length: f64,
+    diag: usize,
+}
+
+/// The tissue's springs and dampers, ready to evaluate.
+#[derive(Debug, Clone)]
+pub struct TissueForces {
+    springs: Vec<LinearSpring>,
+    normals: Vec<NormalSpring>,
+    geometric_in_compression: bool,
+}
+
+impl TissueForces {
+    /// Builds the springs of `mesh` with `params`; `pattern` must be the
+    /// pattern built from `mesh.coupled_pairs()`. `margin ∈ (0, 1)` is the
+    /// asymptote margin of the step limiter.
+    ///
+    /// # Panics
+    /// If `pattern` does not contain the mesh's edges.
+    pub fn new(
+        mesh: &SurfaceMesh,
+        params: &TissueParams,
+        pattern: &BlockSparse,
+        margin: f64,
+        geometric_in_compression: bool,
+    ) -> Self {
+        let x0 = mesh.rest_positions();
+        let areas = mesh.areas();
+        let index = |r, c| pattern.block_index(r, c).expect("edge in pattern");
+        let springs = mesh
+            .edges()
+            .iter()
+            .map(|e| {
+                let rest = (x0[e.j] - x0[e.i]).norm();
+                let g = 0.5 * (areas[e.i] + areas[e.j]) / (rest * rest);
+                let (a, c) = match e.kind {
+                    EdgeKind::Structural => {
+                        (params.structural_stiffness, params.structural_damping)
+                    }
+                    EdgeKind::Shear => (params.shear_stiffness, params.shear_damping),
+                    EdgeKind::Bending => (params.bending_stiffness, params.bending_damping),
+                };
+                LinearSpring {
+                    i: e.i,
+                    j: e.j,
+                    rest,
+                    a: a * g,
+                    c: c * g,
+                    blocks: [
+                        index(e.i, e.i),
+                        index(e.i, e.j),
+                        index(e.j, e.i),
+                        index(e.j, e.j),
+                    ],
+                }
+            })
+            .collect();
+        let asymptote = params.asymptote();
+        let normals = (0..mesh.node_count())
+            .map(|k| {
+                let anchor = mesh.anchors()[k];
+                let rest = (x0[k] - anchor).norm();
+                NormalSpring {
+                    node: k,
+                    anchor,
+                    rest,
+                    a: params.normal_a / areas[k],
+                    b: params.normal_b / areas[k],
+                    c: params.normal_damping * areas[k],
+                    min_length: rest - (1.0 - margin) * asymptote,
+                    diag: pattern.diagonal_index(k),
+                }
+            })
+            .collect();
+        TissueForces {
+            springs,
+            normals,
+            geometric_in_compression,
+        }
+    }
+
+    /// Elastic potential energy (J) of all springs at positions `x` (m).
+    /// Infinite if a normal spring is at or past its asymptote.
+    pub fn potential_energy(&self, x: &[Vec3]) -> f64 {
+        let linear: f64 = self
+            .springs
+            .iter()
+            .map(|s| {
+                let e = (x[s.j] - x[s.i]).norm() - s.rest;
+                0.5 * s.a * e * e
+            })
+            .sum();
+        let normal: f64 = self
+            .normals
+            .iter()
+            .map(|s| {
+                let e = (x[s.node] - s.anchor).norm() - s.rest;
+                if s.a * e + s.b > 0.0 {
+                    normal_energy(s.a, s.b, e)
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .sum();
+        linear + normal
+    }
+
+    /// Largest ratio, over nodes, of the normal spring's compression to its
+    /// asymptote `b/a` (dimensionless; ≥ 1 means a node crossed it).
+    pub fn max_asymptote_ratio(&self, x: &[Vec3]) -> f64 {
+        self.normals
+            .iter()
+            .map(|s| (s.rest - (x[s.node] - s.anchor).norm()) * s.a / s.b)
+            .fold(f64::NEG_INFINITY, f64::max)
+    }
+}
+
+/// Largest `α ∈ [0, 1]` with `|p + s d| ≥ l_min` for all `s ∈ [0, α]`.
+fn path_fraction(p: &Vec3, d: &Vec3, l_min: f64) -> f64 {
+    let dd = d.norm_squared();
+    if dd == 0.0 {
+        return 1.0;
+    }
+    let pd = p.dot(d);
+    let c = p.norm_squared() - l_min * l_min;
+    if pd >= 0.0 {
+        return 1.0; // moving away from the anchor: the length grows
+    }
+    if c <= 0.0 {
+        return 0.0; // at the limit and moving inward
+    }
+    let disc = pd * pd - dd * c;
+    if disc < 0.0 {
+        return 1.0; // the path passes beside the forbidden ball
+    }
+    // Smaller root of dd s² + 2 pd s + c = 0, in the stable form.
+    let s = c / (-pd + disc.sqrt());
+    s.min(1.0)
+}
+
+impl ForceModel for TissueForces {
+    fn add_forces(&mut self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
+        for s in &self.springs {
+            let fi = spring_force(&x[s.i], &x[s.j], s.rest, |e| linear_force(s.a, e))
+                + damper_force(&x[s.i], &x[s.j], &v[s.i], &v[s.j], s.c);
+            f[s.i] += fi;
+            f[s.j] -= fi;
+        }
+        let zero = Vec3::zeros();
+        for s in &self.normals {
+            let k = s.node;
+            f[k] += spring_force(&x[k], &s.anchor, s.rest, |e| normal_force(s.a, s.b, e))
+                + damper_force(&x[k], &s.anchor, &v[k], &zero, s.c);
+        }
+    }
+
+    fn add_jacobians(&mut self, x: &[Vec3], _v: &[Vec3], k: &mut BlockSparse, b: &mut BlockSparse) {
+        let geo = self.geometric_in_compression;
+        for s in &self.springs {
+            let (_, stiff) =
+                spring_force_jacobian(&x[s.i], &x[s.j], s.rest, |e| (s.a * e, s.a), geo);
+            let damp = damper_jacobian(&x[s.i], &x[s.j], s.c);
+            let [ii, ij, ji, jj] = s.blocks;
+            k.add_at(ii, &-stiff);
+            k.add_at(jj, &-stiff);
+            k.add_at(ij, &stiff);
+            k.add_at(ji, &stiff);
+            b.add_at(ii, &-damp);
+            b.add_at(jj, &-damp);
+            b.add_at(ij, &damp);
+            b.add_at(ji, &damp);
+        }
+        for s in &self.normals {
+            let law = |e| (normal_force(s.a, s.b, e), normal_stiffness(s.a, s.b, e));
+            let (_, stiff) = spring_force_jacobian(&x[s.node], &s.anchor, s.rest, law, geo);
+            k.add_at(s.diag, &-stiff);
+            b.add_at(s.diag, &-damper_jacobian(&x[s.node], &s.anchor, s.c));
+        }
+    }
+
+    /// Keeps every normal spring longer than `rest − (1 − margin) b/a` along
+    /// the straight path from `x` to `x + dx`.
+    fn max_step_fraction(&self, x: &[Vec3], dx: &[Vec3]) -> f64 {
+        self.normals
+            .iter()
+            .map(|s| path_fraction(&(x[s.node] - s.anchor), &dx[s.node], s.min_length))
+            .fold(1.0, f64::min)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::path_fraction;
+    use crate::Vec3;
+
+    #[test]
+    fn path_fraction_stops_on_the_limit_sphere() {
+        // From 0.04 m straight towards the anchor, limit at 0.01 m: s = 0.75 of 0.04.
+        let p = Vec3::new(0.0, 0.04, 0.0);
+        let d = Vec3::new(0.0, -0.04, 0.0);
+        assert!((path_fraction(&p, &d, 0.01) - 0.75).abs() < 1e-12);
+        assert_eq!(path_fraction(&p, &(d * 0.5), 0.01), 1.0);
+        assert_eq!(path_fraction(&p, &(-d), 0.01), 1.0);
+        // Passing beside the ball.
+        let side = Vec3::new(1.0, -0.04, 0.0);
+        assert_eq!(path_fraction(&Vec3::new(-0.5, 0.04, 0.0), &side, 0.01), 1.0);
+    }
+}
