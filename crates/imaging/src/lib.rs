@@ -1,1 +1,54 @@
-//! placeholder
+//! The echographic image of echothigh (issue 7, DESIGN.md §5; beyond the
+//! paper, whose image generator was "being implemented"): a B-mode
+//! transverse section of the mid-thigh under the probe, coupled to the
+//! physical model's deformation, in which a healthy femoral vein collapses
+//! under the probe's pressure and a thrombosed one does not.
+//!
+//! - [`ImagingConfig`] / [`AnatomyConfig`]: the `[imaging]` section, with
+//!   published sources for the defaults.
+//! - [`Anatomy`]: tissue classes in tissue coordinates, lumen laws per
+//!   [`VeinState`], the arterial pulse.
+//! - [`SectionDeformation`]: the skin displacement along the section from
+//!   the physics, carried into depth towards the femur (normal springs).
+//! - [`Renderer`]: scatterers fixed in tissue, complex-baseband PSF,
+//!   envelope, attenuation and TGC, log compression; allocation-free
+//!   [`Renderer::render_into`].
+//! - [`write_gray_png`], [`contact_sheet`]: output.
+//!
+//! ```
+//! use echothigh_imaging::*;
+//! let cfg = ImagingConfig { columns: 64, rows: 160, ..Default::default() };
+//! let mut r = Renderer::new(&cfg, VeinState::Healthy).unwrap();
+//! let bone = r.anatomy().unwrap().femur_top();
+//! let press = SectionDeformation::flat_press(0.005, 0.04, 1.5e-3, bone).unwrap();
+//! let input = FrameInput { deformation: &press, probe_pressure: 5.0 / 4e-4, time: 0.0 };
+//! let mut frame = vec![0u8; 64 * 160];
+//! r.render_into(&input, &mut frame).unwrap();
+//! ```
+
+#![warn(missing_docs)]
+
+mod anatomy;
+mod anatomy_config;
+mod config;
+mod deformation;
+mod error;
+mod font;
+mod output;
+pub mod pressure;
+mod psf;
+mod render;
+mod scatterers;
+mod stages;
+mod tissue;
+mod warp;
+
+pub use anatomy::{Anatomy, Vessel, MAX_BREAKPOINTS};
+pub use anatomy_config::{AnatomyConfig, VeinState, VeinStateParams, MMHG};
+pub use config::{ImagingConfig, FWHM_PER_SIGMA};
+pub use deformation::{column_depth, SectionDeformation};
+pub use error::ImagingError;
+pub use output::{contact_sheet, write_gray_png, ContactSheet};
+pub use render::{FrameInput, Lumen, LumenReport, Phantom, Renderer};
+pub use tissue::{Acoustics, Tissue};
+pub use warp::VesselWarp;

@@ -1,0 +1,187 @@
+//! Configuration of the image formation (`[imaging]`).
+//!
+//! Defaults and their sources:
+//! - **Probe and frequency**: a linear vascular probe of ~40 mm aperture at
+//!   5–10 MHz, the usual choice for compression ultrasound of the femoral vein
+//!   (e.g. Needleman et al. 2018, "Ultrasound for lower extremity deep venous
+//!   thrombosis: multidisciplinary recommendations from the Society of
+//!   Radiologists in Ultrasound consensus conference", Circulation 137). Centre
+//!   frequency 7.5 MHz, speed of sound 1540 m/s (the scanners' convention).
+//! - **Resolution**: axial FWHM ≈ half the pulse length; a 2-cycle pulse at
+//!   7.5 MHz (λ = 0.205 mm) gives ≈ 0.2–0.4 mm; lateral FWHM at the focus
+//!   ≈ λ·F# ≈ 0.6–1 mm for F# 3–5 (Szabo 2014, "Diagnostic Ultrasound
+//!   Imaging: Inside Out", 2nd ed., ch. 6–7). Defaults 0.4 mm and 0.8 mm.
+//! - **Attenuation compensated by the TGC**: soft tissue 0.5–0.7 dB/(cm·MHz)
+//!   (Duck 1990, "Physical Properties of Tissue", ch. 4; Goss, Johnston &
+//!   Dunn 1978, JASA 64). Default 0.65 dB/(cm·MHz).
+//! - **Dynamic range** 60 dB, the usual B-mode display setting.
+//! - **Scatterer density**: fully developed speckle needs ≳ 10 scatterers per
+//!   resolution cell (Wagner et al. 1983, "Statistics of speckle in ultrasound
+//!   B-scans", IEEE Trans. Sonics Ultrason. 30(3)); the default 40 per mm²
+//!   puts ≈ 14 in the 2-D cell `2π σx σz` of the default PSF.
+
+use crate::anatomy_config::AnatomyConfig;
+use crate::error::ImagingError;
+use serde::{Deserialize, Serialize};
+
+/// Full width at half maximum of a Gaussian divided by its σ: `2 √(2 ln 2)`.
+pub const FWHM_PER_SIGMA: f64 = 2.354_820_045_030_949;
+
+/// Parameters of the B-mode image formation (`[imaging]`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ImagingConfig {
+    /// Image columns (lateral pixels, along the probe's width). Default 256.
+    pub columns: usize,
+    /// Image rows (axial pixels, depth). Default 384.
+    pub rows: usize,
+    /// Lateral field of view, centred on the probe (m). Default 0.040.
+    pub width: f64,
+    /// Imaged depth below the probe face (m). Default 0.060.
+    pub depth: f64,
+    /// Centre frequency of the pulse (Hz). Default 7.5e6.
+    pub center_frequency: f64,
+    /// Speed of sound assumed by the scanner (m/s). Default 1540.
+    pub sound_speed: f64,
+    /// Axial full width at half maximum of the PSF envelope (m). Default 0.4e-3.
+    pub axial_fwhm: f64,
+    /// Lateral full width at half maximum of the PSF envelope (m). Default 0.8e-3.
+    pub lateral_fwhm: f64,
+    /// Attenuation slope compensated by the time-gain compensation
+    /// (dB/(cm·MHz), one way; the TGC applies twice this, round trip). Default 0.65.
+    pub tgc_attenuation: f64,
+    /// Displayed dynamic range of the log compression (dB). Default 60.
+    pub dynamic_range: f64,
+    /// Level of white above the mean echo of muscle (dB). Default 26.
+    pub headroom: f64,
+    /// Scatterers per unit area of the section (1/m²). Default 4.0e7 (40 per mm²).
+    pub scatterer_density: f64,
+    /// Seed of the scatterer generator (same seed, same image). Default 7.
+    pub seed: u64,
+    /// Deepest indentation the scatterer field is prepared for (m): tissue
+    /// down to `depth + max_indentation` below the skin is populated. Default 0.030.
+    pub max_indentation: f64,
+    /// Width of the probe face along the image plane (m), for the pressure
+    /// under the face (must match `[probe]`). Default 0.040.
+    pub probe_width: f64,
+    /// Elevation (thickness) of the probe face across the image plane (m),
+    /// for the pressure under the face (must match `[probe]`). Default 0.010.
+    pub probe_elevation: f64,
+    /// The anatomy of the section (`[imaging.anatomy]`).
+    pub anatomy: AnatomyConfig,
+}
+
+impl Default for ImagingConfig {
+    fn default() -> Self {
+        ImagingConfig {
+            columns: 256,
+            rows: 384,
+            width: 0.040,
+            depth: 0.060,
+            center_frequency: 7.5e6,
+            sound_speed: 1540.0,
+            axial_fwhm: 0.4e-3,
+            lateral_fwhm: 0.8e-3,
+            tgc_attenuation: 0.65,
+            dynamic_range: 60.0,
+            headroom: 26.0,
+            scatterer_density: 4.0e7,
+            seed: 7,
+            max_indentation: 0.030,
+            probe_width: 0.040,
+            probe_elevation: 0.010,
+            anatomy: AnatomyConfig::default(),
+        }
+    }
+}
+
+impl ImagingConfig {
+    /// Largest accepted frame side (pixels).
+    pub const MAX_PIXELS_PER_SIDE: usize = 4096;
+    /// Largest accepted number of scatterers in the populated field.
+    pub const MAX_SCATTERERS: f64 = 2.0e7;
+
+    /// Checks every field, naming the offending key as `"{prefix}.{field}"`.
+    pub fn validate(&self, prefix: &str) -> Result<(), ImagingError> {
+        for (field, n) in [("columns", self.columns), ("rows", self.rows)] {
+            if !(8..=Self::MAX_PIXELS_PER_SIDE).contains(&n) {
+                return Err(ImagingError::invalid(
+                    prefix,
+                    field,
+                    n,
+                    "must be between 8 and 4096",
+                ));
+            }
+        }
+        ImagingError::positive(prefix, "width", self.width)?;
+        ImagingError::positive(prefix, "depth", self.depth)?;
+        ImagingError::positive(prefix, "center_frequency", self.center_frequency)?;
+        ImagingError::positive(prefix, "sound_speed", self.sound_speed)?;
+        ImagingError::positive(prefix, "axial_fwhm", self.axial_fwhm)?;
+        ImagingError::positive(prefix, "lateral_fwhm", self.lateral_fwhm)?;
+        let dx = self.width / self.columns as f64;
+        let dz = self.depth / self.rows as f64;
+        if self.lateral_fwhm < dx || self.lateral_fwhm > 64.0 * dx {
+            return Err(ImagingError::invalid(
+                prefix,
+                "lateral_fwhm",
+                self.lateral_fwhm,
+                "must span 1 to 64 lateral pixels (width / columns)",
+            ));
+        }
+        if self.axial_fwhm < dz || self.axial_fwhm > 64.0 * dz {
+            return Err(ImagingError::invalid(
+                prefix,
+                "axial_fwhm",
+                self.axial_fwhm,
+                "must span 1 to 64 axial pixels (depth / rows)",
+            ));
+        }
+        ImagingError::non_negative(prefix, "tgc_attenuation", self.tgc_attenuation)?;
+        ImagingError::in_range(
+            prefix,
+            "dynamic_range",
+            self.dynamic_range,
+            10.0,
+            120.0,
+            "must be between 10 and 120 dB",
+        )?;
+        ImagingError::in_range(
+            prefix,
+            "headroom",
+            self.headroom,
+            0.0,
+            80.0,
+            "must be between 0 and 80 dB",
+        )?;
+        ImagingError::positive(prefix, "scatterer_density", self.scatterer_density)?;
+        ImagingError::non_negative(prefix, "max_indentation", self.max_indentation)?;
+        ImagingError::positive(prefix, "probe_width", self.probe_width)?;
+        ImagingError::positive(prefix, "probe_elevation", self.probe_elevation)?;
+        let area = (self.width + 0.01) * (self.depth + self.max_indentation + 0.01);
+        if self.scatterer_density * area > Self::MAX_SCATTERERS {
+            return Err(ImagingError::invalid(
+                prefix,
+                "scatterer_density",
+                self.scatterer_density,
+                "too many scatterers for the field (limit 2e7)",
+            ));
+        }
+        self.anatomy.validate(&format!("{prefix}.anatomy"))
+    }
+
+    /// Lateral pixel pitch (m).
+    pub fn pixel_width(&self) -> f64 {
+        self.width / self.columns as f64
+    }
+
+    /// Axial pixel pitch (m).
+    pub fn pixel_depth(&self) -> f64 {
+        self.depth / self.rows as f64
+    }
+
+    /// Area of the probe face (m²): `probe_width · probe_elevation`.
+    pub fn probe_area(&self) -> f64 {
+        self.probe_width * self.probe_elevation
+    }
+}

@@ -1,0 +1,250 @@
+//! Scatterers fixed in tissue (material) coordinates, binned by image column.
+//!
+//! Each column of the image (plus a halo of `⌈3 σ_x / Δx⌉` columns on each
+//! side, so that the lateral PSF is complete at the edges) owns a Poisson
+//! number of scatterers with uniform depths, sorted by depth. A scatterer
+//! carries a circular complex Gaussian amplitude whose power is the mean
+//! backscatter of its tissue (dB relative to muscle), modulated along
+//! connective-tissue lines: septa in the fat, perimysium in the muscle.
+//! Its lateral position is its column's centre (the section deforms along
+//! the depth only, so a column's scatterers stay in their column); its depth
+//! is where the deformation acts. Same seed, same field.
+
+use crate::anatomy::Anatomy;
+use crate::config::{ImagingConfig, FWHM_PER_SIGMA};
+use crate::tissue::Tissue;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Poisson, StandardNormal};
+
+/// The binned scatterer field.
+#[derive(Debug, Clone)]
+pub(crate) struct ScattererField {
+    /// Halo columns on each side of the image.
+    pub halo: usize,
+    /// `bin_start[b]..bin_start[b + 1]`: scatterers of bin `b` (image column `b − halo`).
+    pub bin_start: Vec<u32>,
+    /// Depth below the undeformed skin (m), increasing within a bin.
+    pub depth: Vec<f32>,
+    /// Complex amplitude `[re, im]`.
+    pub amp: Vec<[f32; 2]>,
+}
+
+/// A straight line of connective tissue in the section (tissue coordinates, m).
+#[derive(Debug, Clone, Copy)]
+struct Line {
+    a: (f64, f64),
+    b: (f64, f64),
+    half_width: f64,
+    gain: f64,
+}
+
+impl Line {
+    fn distance(&self, u: f64, d: f64) -> f64 {
+        let (ex, ey) = (self.b.0 - self.a.0, self.b.1 - self.a.1);
+        let len2 = ex * ex + ey * ey;
+        let t = (((u - self.a.0) * ex + (d - self.a.1) * ey) / len2).clamp(0.0, 1.0);
+        let (px, py) = (self.a.0 + t * ex - u, self.a.1 + t * ey - d);
+        (px * px + py * py).sqrt()
+    }
+}
+
+/// Random connective-tissue lines: `count` lines with centres in
+/// `[u0, u1] × [d0, d1]`, lengths in `len`, tilts within `±tilt` (rad).
+#[allow(clippy::too_many_arguments)]
+fn lines(
+    rng: &mut ChaCha8Rng,
+    count: usize,
+    (u0, u1): (f64, f64),
+    (d0, d1): (f64, f64),
+    len: (f64, f64),
+    tilt: f64,
+    half_width: f64,
+    gain_db: f64,
+) -> Vec<Line> {
+    (0..count)
+        .map(|_| {
+            let c = (rng.gen_range(u0..u1), rng.gen_range(d0..d1));
+            let l = 0.5 * rng.gen_range(len.0..len.1);
+            let th: f64 = rng.gen_range(-tilt..tilt);
+            let (dx, dy) = (l * th.cos(), l * th.sin());
+            Line {
+                a: (c.0 - dx, c.1 - dy),
+                b: (c.0 + dx, c.1 + dy),
+                half_width,
+                gain: 10f64.powf(gain_db / 20.0),
+            }
+        })
+        .collect()
+}
+
+impl ScattererField {
+    /// Lateral geometry of `cfg`: (halo, bins, centre of bin 0 in m).
+    fn bins(cfg: &ImagingConfig) -> (usize, usize, f64) {
+        let dx = cfg.pixel_width();
+        let halo = ((3.0 * cfg.lateral_fwhm / FWHM_PER_SIGMA / dx).ceil() as usize).max(1);
+        let bins = cfg.columns + 2 * halo;
+        (halo, bins, -0.5 * cfg.width + (0.5 - halo as f64) * dx)
+    }
+
+    /// Deepest populated tissue depth (m).
+    fn max_depth(cfg: &ImagingConfig) -> f64 {
+        cfg.depth + cfg.max_indentation + 2.0 * cfg.axial_fwhm
+    }
+
+    /// Fills every bin with `density` scatterers per m²; `amplitude(u, d)`
+    /// gives each one's RMS amplitude (or `None` to drop it).
+    fn generate(
+        cfg: &ImagingConfig,
+        density: f64,
+        rng: &mut ChaCha8Rng,
+        mut amplitude: impl FnMut(f64, f64) -> Option<f64>,
+    ) -> Self {
+        let (halo, bins, u_first) = Self::bins(cfg);
+        let dx = cfg.pixel_width();
+        let dmax = Self::max_depth(cfg);
+        // A non-positive or non-finite rate leaves the field empty.
+        let poisson = Poisson::new(density * dx * dmax).ok();
+        let mut bin_start = Vec::with_capacity(bins + 1);
+        let mut depth = Vec::new();
+        let mut amp = Vec::new();
+        let mut col: Vec<(f32, [f32; 2])> = Vec::new();
+        for b in 0..bins {
+            bin_start.push(depth.len() as u32);
+            let n: f64 = poisson.as_ref().map_or(0.0, |p| p.sample(rng));
+            col.clear();
+            let uc = u_first + b as f64 * dx;
+            for _ in 0..n as usize {
+                let u = uc + dx * (rng.gen::<f64>() - 0.5);
+                let d = dmax * rng.gen::<f64>();
+                let re: f64 = rng.sample(StandardNormal);
+                let im: f64 = rng.sample(StandardNormal);
+                if let Some(a) = amplitude(u, d) {
+                    let s = a * std::f64::consts::FRAC_1_SQRT_2;
+                    col.push((d as f32, [(re * s) as f32, (im * s) as f32]));
+                }
+            }
+            col.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+            for &(d, a) in &col {
+                depth.push(d);
+                amp.push(a);
+            }
+        }
+        bin_start.push(depth.len() as u32);
+        ScattererField {
+            halo,
+            bin_start,
+            depth,
+            amp,
+        }
+    }
+
+    /// The scatterers of `anatomy`, at the density of `cfg`, seeded by `cfg.seed`.
+    pub fn from_anatomy(cfg: &ImagingConfig, anatomy: &Anatomy) -> Self {
+        let a = anatomy.config();
+        let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+        let half = 0.5 * cfg.width + 2e-3;
+        let fat = (
+            a.skin_thickness + 0.3e-3,
+            a.skin_thickness + a.fat_thickness - 0.3e-3,
+        );
+        let muscle_top = a.skin_thickness + a.fat_thickness;
+        let deep = Self::max_depth(cfg);
+        // Septa: ~1 per 12 mm² of fat; perimysium: ~1 per 5 mm² of muscle.
+        let n_septa = (2.0 * half * a.fat_thickness / 12e-6).round() as usize;
+        let n_peri = (2.0 * half * (deep - muscle_top).max(0.0) / 5e-6).round() as usize;
+        let mut all = lines(
+            &mut rng,
+            n_septa,
+            (-half, half),
+            fat,
+            (3e-3, 12e-3),
+            0.35,
+            0.1e-3,
+            20.0,
+        );
+        all.extend(lines(
+            &mut rng,
+            n_peri,
+            (-half, half),
+            (muscle_top + 1e-3, deep),
+            (1e-3, 5e-3),
+            0.5,
+            0.08e-3,
+            9.0,
+        ));
+        // Index the lines by 1 mm depth bands for the distance queries.
+        let band = 1e-3;
+        let nb = (deep / band).ceil() as usize + 1;
+        let mut bands: Vec<Vec<u32>> = vec![Vec::new(); nb];
+        for (i, l) in all.iter().enumerate() {
+            let lo = (l.a.1.min(l.b.1) - l.half_width).max(0.0);
+            let hi = l.a.1.max(l.b.1) + l.half_width;
+            for list in bands
+                .iter_mut()
+                .take(((hi / band) as usize + 1).min(nb))
+                .skip((lo / band) as usize)
+            {
+                list.push(i as u32);
+            }
+        }
+        Self::generate(cfg, cfg.scatterer_density, &mut rng, |u, d| {
+            let tissue = anatomy.tissue_at(u, d);
+            let db = anatomy.echo_db(tissue)?;
+            let mut amp = 10f64.powf(db / 20.0);
+            if matches!(tissue, Tissue::Fat | Tissue::Muscle) {
+                let list = &bands[((d / band) as usize).min(nb - 1)];
+                let boost = list
+                    .iter()
+                    .map(|&i| &all[i as usize])
+                    .filter(|l| l.distance(u, d) < l.half_width)
+                    .map(|l| l.gain)
+                    .fold(1.0, f64::max);
+                amp *= boost;
+            }
+            Some(amp)
+        })
+    }
+
+    /// A homogeneous medium of `density` scatterers per m² with unit power.
+    pub fn uniform(cfg: &ImagingConfig, density: f64, seed: u64) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        Self::generate(cfg, density, &mut rng, |_, _| Some(1.0))
+    }
+
+    /// Unit point scatterers at `(column, depth)` (image column index, depth in m).
+    pub fn points(cfg: &ImagingConfig, points: &[(usize, f64)]) -> Self {
+        let (halo, bins, _) = Self::bins(cfg);
+        let mut sorted: Vec<(usize, f64)> = points.iter().map(|&(c, d)| (c + halo, d)).collect();
+        sorted.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+        let mut bin_start = Vec::with_capacity(bins + 1);
+        let mut depth = Vec::new();
+        let mut amp = Vec::new();
+        let mut next = 0;
+        for b in 0..bins {
+            bin_start.push(depth.len() as u32);
+            while next < sorted.len() && sorted[next].0 == b {
+                depth.push(sorted[next].1 as f32);
+                amp.push([1.0, 0.0]);
+                next += 1;
+            }
+        }
+        bin_start.push(depth.len() as u32);
+        ScattererField {
+            halo,
+            bin_start,
+            depth,
+            amp,
+        }
+    }
+
+    /// Number of bins (image columns plus halos).
+    pub fn bin_count(&self) -> usize {
+        self.bin_start.len() - 1
+    }
+
+    /// Number of scatterers.
+    pub fn len(&self) -> usize {
+        self.depth.len()
+    }
+}

@@ -1,0 +1,70 @@
+//! Tissue classes of the section and their acoustic properties.
+//!
+//! Backscatter is given relative to muscle (dB of mean echo intensity) and
+//! attenuation as a one-way slope (dB/(cm·MHz)). Values are representative of
+//! the compilations in Duck 1990 ("Physical Properties of Tissue", ch. 4:
+//! attenuation of fat ≈ 0.6, muscle ≈ 0.6–1.0, skin ≈ 1–2, blood ≈ 0.15–0.2,
+//! cortical bone ≈ 10–20 dB/(cm·MHz)) and the B-mode appearance described in
+//! clinical texts: dermis hyperechoic, fat hypoechoic with echogenic septa,
+//! fascia bright, muscle mid-grey with echogenic perimysium, blood anechoic,
+//! bone cortex very bright with a shadow behind it.
+
+/// A tissue class of the section.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Tissue {
+    /// Coupling gel above the skin (no echo, no attenuation).
+    Gel,
+    /// Epidermis and dermis.
+    Skin,
+    /// Subcutaneous fat.
+    Fat,
+    /// Deep or intermuscular fascia.
+    Fascia,
+    /// Skeletal muscle.
+    Muscle,
+    /// Wall of the femoral vein.
+    VeinWall,
+    /// Lumen of the femoral vein (blood or thrombus, by vein state).
+    VeinLumen,
+    /// Wall of the femoral artery.
+    ArteryWall,
+    /// Lumen of the femoral artery (blood).
+    ArteryLumen,
+    /// Femoral cortex.
+    Cortex,
+    /// Femoral marrow cavity (behind the cortex: never reached by the beam).
+    Marrow,
+}
+
+/// Acoustic properties of one tissue class.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Acoustics {
+    /// Mean backscattered intensity relative to muscle (dB); `None`: no scatterers.
+    pub echo_db: Option<f64>,
+    /// One-way attenuation slope (dB/(cm·MHz)).
+    pub attenuation: f64,
+}
+
+impl Tissue {
+    /// Properties of the classes that do not depend on the vein state
+    /// (vein wall and lumen are set by [`crate::VeinStateParams`]).
+    pub fn acoustics(self) -> Acoustics {
+        let (echo, attenuation) = match self {
+            Tissue::Gel => (None, 0.0),
+            Tissue::Skin => (Some(8.0), 1.0),
+            Tissue::Fat => (Some(-9.0), 0.6),
+            Tissue::Fascia => (Some(12.0), 0.8),
+            Tissue::Muscle => (Some(0.0), 0.7),
+            Tissue::VeinWall => (Some(4.0), 0.8),
+            Tissue::VeinLumen => (Some(-50.0), 0.15),
+            Tissue::ArteryWall => (Some(6.0), 0.8),
+            Tissue::ArteryLumen => (Some(-50.0), 0.15),
+            Tissue::Cortex => (Some(22.0), 20.0),
+            Tissue::Marrow => (None, 20.0),
+        };
+        Acoustics {
+            echo_db: echo,
+            attenuation,
+        }
+    }
+}
