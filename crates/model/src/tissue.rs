@@ -1,6 +1,8 @@
 //! The two-layer tissue of the paper (§3, Fig. 2) as a [`ForceModel`]:
 //! linear springs with dampers along the mesh edges, and a nonlinear normal
-//! spring with a damper from every surface node to its fixed anchor.
+//! spring with a damper from every surface node to its fixed anchor, plus
+//! the layer's tangential (shear) support, a linear tie of each node to its
+//! rest position in the rest tangent plane (see [`TissueParams`]).
 //!
 //! Parameters are converted once from the resolution-independent
 //! [`TissueParams`] (see its docs) to per-spring values; the block indices
@@ -16,6 +18,7 @@ use crate::springs::{
     spring_force, spring_force_jacobian,
 };
 use crate::Vec3;
+use nalgebra::Matrix3;
 
 /// A linear spring `f = a x` with a damper `c`, between nodes `i` and `j`.
 #[derive(Debug, Clone, Copy)]
@@ -38,6 +41,12 @@ struct NormalSpring {
     a: f64,
     b: f64,
     c: f64,
+    /// Rest position of the node (m).
+    rest_position: Vec3,
+    /// Tangential stiffness block `k_t (I − n₀ n₀ᵀ)` (N/m).
+    tangential_k: Matrix3<f64>,
+    /// Tangential damping block `c_t (I − n₀ n₀ᵀ)` (N·s/m).
+    tangential_c: Matrix3<f64>,
     /// Smallest length allowed to a Newton iterate: `rest − (1 − margin) b/a`.
     min_length: f64,
     diag: usize,
@@ -101,7 +110,12 @@ impl TissueForces {
             .map(|k| {
                 let anchor = mesh.anchors()[k];
                 let rest = (x0[k] - anchor).norm();
+                let n0 = mesh.rest_normals()[k];
+                let tangent = Matrix3::identity() - n0 * n0.transpose();
                 NormalSpring {
+                    rest_position: x0[k],
+                    tangential_k: tangent * (params.tangential_stiffness * areas[k]),
+                    tangential_c: tangent * (params.tangential_damping * areas[k]),
                     node: k,
                     anchor,
                     rest,
@@ -136,8 +150,9 @@ impl TissueForces {
             .iter()
             .map(|s| {
                 let e = (x[s.node] - s.anchor).norm() - s.rest;
+                let u = x[s.node] - s.rest_position;
                 if s.a * e + s.b > 0.0 {
-                    normal_energy(s.a, s.b, e)
+                    normal_energy(s.a, s.b, e) + 0.5 * u.dot(&(s.tangential_k * u))
                 } else {
                     f64::INFINITY
                 }
@@ -191,7 +206,9 @@ impl ForceModel for TissueForces {
         for s in &self.normals {
             let k = s.node;
             f[k] += spring_force(&x[k], &s.anchor, s.rest, |e| normal_force(s.a, s.b, e))
-                + damper_force(&x[k], &s.anchor, &v[k], &zero, s.c);
+                + damper_force(&x[k], &s.anchor, &v[k], &zero, s.c)
+                - s.tangential_k * (x[k] - s.rest_position)
+                - s.tangential_c * v[k];
         }
     }
 
@@ -214,8 +231,11 @@ impl ForceModel for TissueForces {
         for s in &self.normals {
             let law = |e| (normal_force(s.a, s.b, e), normal_stiffness(s.a, s.b, e));
             let (_, stiff) = spring_force_jacobian(&x[s.node], &s.anchor, s.rest, law, geo);
-            k.add_at(s.diag, &-stiff);
-            b.add_at(s.diag, &-damper_jacobian(&x[s.node], &s.anchor, s.c));
+            k.add_at(s.diag, &-(stiff + s.tangential_k));
+            b.add_at(
+                s.diag,
+                &-(damper_jacobian(&x[s.node], &s.anchor, s.c) + s.tangential_c),
+            );
         }
     }
 

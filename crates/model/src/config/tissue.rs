@@ -22,6 +22,15 @@ use serde::{Deserialize, Serialize};
 /// `1/normal_b` (N/m³) and the compression asymptote `normal_b / normal_a`
 /// (m) does not depend on the area; it must be shorter than
 /// `thigh.tissue_thickness`.
+///
+/// **Tangential support** (beyond the paper): the normal springs alone have
+/// no shear stiffness, and compressed they are laterally unstable (their
+/// geometric stiffness `f/l` is negative), so under a probe the skin could
+/// twist around the femur, resisted only by the membrane's shear. The layer
+/// of tissue between skin and bone resists that shear: each node is tied to
+/// its rest position in the rest tangent plane by a linear spring
+/// `−k_t A (I − n₀ n₀ᵀ)(x − x_rest)` with a damper alike (per unit area,
+/// small tangential displacements).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TissueParams {
@@ -46,6 +55,11 @@ pub struct TissueParams {
     pub normal_b: f64,
     /// Normal damper per unit area (N·s/m³): node damping = this × node area. Default 2000.
     pub normal_damping: f64,
+    /// Tangential (shear) stiffness of the tissue layer per unit area (N/m³):
+    /// node value = this × node area. Default 1.0e5 (≈ G/thickness for G ≈ 4 kPa).
+    pub tangential_stiffness: f64,
+    /// Tangential damping per unit area (N·s/m³). Default 500.
+    pub tangential_damping: f64,
     /// Gravity acceleration (m/s²). Default `[0, 0, 0]`: the rest shape is the
     /// thigh as observed, i.e. already in equilibrium under gravity.
     pub gravity: [f64; 3],
@@ -64,6 +78,8 @@ impl Default for TissueParams {
             normal_a: 5.0e-5,
             normal_b: 1.5e-6,
             normal_damping: 2000.0,
+            tangential_stiffness: 1.0e5,
+            tangential_damping: 500.0,
             gravity: [0.0, 0.0, 0.0],
         }
     }
@@ -87,6 +103,8 @@ impl TissueParams {
         positive(prefix, "normal_a", self.normal_a)?;
         positive(prefix, "normal_b", self.normal_b)?;
         non_negative(prefix, "normal_damping", self.normal_damping)?;
+        non_negative(prefix, "tangential_stiffness", self.tangential_stiffness)?;
+        non_negative(prefix, "tangential_damping", self.tangential_damping)?;
         for (i, g) in self.gravity.iter().enumerate() {
             if !g.is_finite() {
                 return Err(ConfigError::invalid(
