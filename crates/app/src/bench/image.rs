@@ -1,10 +1,129 @@
-//! Placeholder: owned by the helper building this part (see docs/ARCHITECTURE.md).
+//! `echothigh bench image`: frame rate of the B-mode renderer at the
+//! configured size, on one core (the allocation-free serial path) and on all
+//! cores (rayon over image columns), under a press that varies every frame.
 
-/// Arguments.
+use anyhow::{Context, Result};
+use echothigh_imaging::{FrameInput, ImagingConfig, Renderer, SectionDeformation, VeinState};
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `echothigh bench image`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// Print the report as JSON (otherwise a short text summary).
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the JSON report to this file.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Frames timed per mode (after 10 warm-up frames).
+    #[arg(long, default_value_t = 300)]
+    pub frames: usize,
+}
 
-/// Runs the command.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("not built yet")
+/// Percentiles of frame times (s).
+#[derive(Debug, serde::Serialize)]
+struct Timing {
+    threads: usize,
+    frames: usize,
+    median_s: f64,
+    p90_s: f64,
+    p99_s: f64,
+    max_s: f64,
+    fps_median: f64,
+    fps_mean: f64,
+}
+
+fn timing(mut t: Vec<f64>, threads: usize) -> Timing {
+    let total: f64 = t.iter().sum();
+    t.sort_by(f64::total_cmp);
+    let q = |p: f64| t[((t.len() - 1) as f64 * p).round() as usize];
+    Timing {
+        threads,
+        frames: t.len(),
+        median_s: q(0.5),
+        p90_s: q(0.9),
+        p99_s: q(0.99),
+        max_s: q(1.0),
+        fps_median: 1.0 / q(0.5),
+        fps_mean: t.len() as f64 / total,
+    }
+}
+
+fn run_mode(
+    r: &mut Renderer,
+    presses: &[SectionDeformation],
+    frames: usize,
+    parallel: bool,
+) -> Result<Vec<f64>> {
+    let (w, h) = r.frame_size();
+    let mut out = vec![0u8; w * h];
+    let mut times = Vec::with_capacity(frames);
+    for k in 0..frames + 10 {
+        let d = &presses[k % presses.len()];
+        let force = 10.0 * d.face_depth(0.02) / 0.012;
+        let input = FrameInput {
+            deformation: d,
+            probe_pressure: force / r.config().probe_area(),
+            time: k as f64 / 60.0,
+        };
+        let t0 = Instant::now();
+        if parallel {
+            r.render_into_parallel(&input, &mut out)?;
+        } else {
+            r.render_into(&input, &mut out)?;
+        }
+        let dt = t0.elapsed().as_secs_f64();
+        if k >= 10 {
+            times.push(dt);
+        }
+    }
+    Ok(times)
+}
+
+/// Runs the benchmark.
+pub fn run(args: Args) -> Result<()> {
+    anyhow::ensure!(args.frames > 0, "--frames must be > 0");
+    let cfg = ImagingConfig::default();
+    let mut r = Renderer::new(&cfg, VeinState::Healthy)?;
+    let bone = r.anatomy().context("anatomy")?.femur_top();
+    // A press going from 2 to 14 mm and back over 60 frames.
+    let presses: Vec<SectionDeformation> = (0..60)
+        .map(|k| {
+            let phase = k as f64 / 60.0 * std::f64::consts::TAU;
+            let depth = 8e-3 - 6e-3 * phase.cos();
+            SectionDeformation::flat_press(depth, cfg.probe_width, 1.5e-3, bone)
+        })
+        .collect::<Result<_, _>>()?;
+    let one = run_mode(&mut r, &presses, args.frames, false)?;
+    let all = run_mode(&mut r, &presses, args.frames, true)?;
+    let report = serde_json::json!({
+        "benchmark": "image",
+        "profile": if cfg!(debug_assertions) { "debug" } else { "release" },
+        "columns": cfg.columns,
+        "rows": cfg.rows,
+        "width_m": cfg.width,
+        "depth_m": cfg.depth,
+        "scatterers": r.scatterer_count(),
+        "one_core": timing(one, 1),
+        "all_cores": timing(all, rayon::current_num_threads()),
+        "goal_fps_one_core": 60.0,
+    });
+    let text = serde_json::to_string_pretty(&report)?;
+    if args.json {
+        println!("{text}");
+    } else {
+        println!(
+            "image {}x{}: one core {:.0} fps (median), {} threads {:.0} fps",
+            cfg.columns,
+            cfg.rows,
+            report["one_core"]["fps_median"].as_f64().unwrap_or(0.0),
+            rayon::current_num_threads(),
+            report["all_cores"]["fps_median"].as_f64().unwrap_or(0.0)
+        );
+    }
+    if let Some(path) = &args.out {
+        std::fs::write(path, &text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    Ok(())
 }
