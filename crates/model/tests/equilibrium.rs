@@ -112,3 +112,43 @@ fn settles_on_the_sparse_cholesky_equilibrium() {
         diff / disp_ref
     );
 }
+
+/// `solve_stiffness` gives the quasi-static compliance: the displacement
+/// under a small extra load `ε n` at equilibrium, divided by ε.
+#[test]
+fn solve_stiffness_matches_the_static_response_to_a_small_load() {
+    let mut config = common::small_config(16, 7);
+    config.integrator.cg_tol = 1e-12;
+    config.integrator.newton_tol = 1e-12;
+    config.integrator.newton_abs_tol = 1e-16;
+    let mut m = common::model(&config);
+    common::press_top(&mut m, 6.0); // a pre-loaded (stiffened) state
+    for _ in 0..40 {
+        m.step(1.0, &mut NoExtraForce); // h = 1 s: backward Euler ≈ static Newton
+    }
+    let n = m.node_count();
+    let top = common::top_node(&m);
+    let normal = m.mesh().rest_normals()[top];
+    let mut rhs = vec![Vec3::zeros(); n];
+    rhs[top] = -normal; // 1 N inward
+    let mut compliance = vec![Vec3::zeros(); n];
+    let s = m.solve_stiffness(&mut NoExtraForce, &rhs, &mut compliance);
+    assert!(s.converged && !s.indefinite, "{s:?}");
+    let before = m.positions().to_vec();
+    let eps = 1e-3; // N
+    m.external_forces_mut()[top] -= normal * eps;
+    for _ in 0..40 {
+        m.step(1.0, &mut NoExtraForce);
+    }
+    let mut worst: f64 = 0.0;
+    let scale = compliance.iter().map(|c| c.norm()).fold(0.0, f64::max);
+    for i in 0..n {
+        let fd = (m.positions()[i] - before[i]) / eps;
+        worst = worst.max((fd - compliance[i]).norm());
+    }
+    // The tangent omits compressed springs' geometric terms: a small model error.
+    assert!(worst < 0.02 * scale, "compliance error {worst} vs {scale}");
+    // Local stiffness k = 1 / (nᵀ (−K)⁻¹ n) is positive and sensible (N/m).
+    let k = 1.0 / (-normal).dot(&compliance[top]);
+    assert!(k > 100.0 && k < 1e5, "{k}");
+}
