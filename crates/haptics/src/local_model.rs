@@ -261,11 +261,10 @@ mod tests {
     }
 
     #[test]
-    fn plane_derivatives_match_finite_differences_at_unit_normal() {
-        // with_params normalizes, so the finite difference of the normalized
-        // model differs from ∂φ/∂n off the unit sphere; compare on the raw
-        // linear form instead (normal exactly along an axis is a fixed point
-        // of the normalization to first order only in its own component).
+    fn plane_derivatives_are_the_linear_form() {
+        // `with_params` re-normalizes the normal, so finite differences of
+        // the normalized model are not ∂φ/∂n of the raw form `n·x − d`;
+        // check the analytic derivatives directly.
         let p = Plane {
             normal: Vec3::new(0.0, 1.0, 0.0),
             offset: 0.02,
@@ -275,6 +274,9 @@ mod tests {
         let dv = p.value_du(&x);
         assert_eq!(dv, Params::new(x.x, x.y, x.z, -1.0));
         assert_eq!(p.gradient(&x), Vec3::y());
+        let mut expected = Matrix3x4::zeros();
+        expected.fixed_view_mut::<3, 3>(0, 0).fill_with_identity();
+        assert_eq!(p.gradient_du(&x), expected);
     }
 
     #[test]
