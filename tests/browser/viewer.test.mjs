@@ -7,7 +7,7 @@
 // malformed message gets an error back and the connection stays up; one exam
 // question is answered and scored. Saves screenshots. Exits non-zero on failure.
 import { createRequire } from 'node:module';
-import { mkdirSync, mkdtempSync, rmSync } from 'node:fs';
+import { mkdirSync, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join } from 'node:path';
 
@@ -125,7 +125,13 @@ try {
     `${echo.width}×${echo.height}, mean ${echoStats.mean.toFixed(1)}, std ${echoStats.std.toFixed(1)}`);
   await page.screenshot({ path: join(shots, '01-loaded.png') });
 
-  // Drag the probe over the thigh, pressing deeper with the wheel.
+  // Start from rest (the server may have been used before), then drag the
+  // probe over the thigh, pressing deeper with the wheel.
+  await page.click('#reset');
+  await until(page, () => {
+    const s = window.echothigh.state;
+    return Math.hypot(...s.physics_force) < 0.5 && Math.hypot(...s.rendered_force) < 0.5;
+  }, null, 'the force to vanish after a reset');
   const start = await page.evaluate(findThigh);
   check('found the thigh under the mouse', !!start, start ? `theta ${start.hit.theta.toFixed(2)} z ${start.hit.z.toFixed(3)}` : 'no hit');
   const before = await page.evaluate(forceOf);
@@ -167,7 +173,8 @@ try {
   check('a malformed message gets an error and the connection stays up', true,
     await page.evaluate(() => window.echothigh.lastError));
 
-  // One exam question.
+  // One exam question (the session score may hold earlier answers).
+  const examBefore = await page.evaluate(() => window.echothigh.state.exam);
   await page.click('#exam-start');
   await until(page, () => window.echothigh.state.exam.open && window.echothigh.state.vein === null,
     null, 'an open exam question with the vein hidden');
@@ -184,14 +191,34 @@ try {
   }, null, 'the exam result');
   const shown = await page.textContent('#exam-result');
   check('one exam question answered and scored',
-    exam.answered === 1 && exam.correct === (exam.last.correct ? 1 : 0) &&
+    exam.answered === examBefore.answered + 1 &&
+      exam.correct === examBefore.correct + (exam.last.correct ? 1 : 0) &&
       exam.last.correct === (exam.last.truth !== 'healthy') && shown.includes('the vein was'),
     `${shown} · score ${exam.correct}/${exam.answered}`);
   await page.screenshot({ path: join(shots, '03-exam.png') });
 
-  const fps = await page.evaluate(() => document.getElementById('st-fps').textContent);
-  const echoFps = await page.evaluate(() => document.getElementById('echo-fps').textContent);
-  console.log(`info 3D view ${fps}, image ${echoFps} (headless, software WebGL)`);
+  // Rates seen by the page over its last 300 events (mean rate; median, p95
+  // and max of the intervals), as JSON (a measurement, not a check: headless chromium renders
+  // WebGL in software on a shared CPU).
+  const rates = await page.evaluate(() => {
+    const summary = (t) => {
+      const d = t.slice(1).map((x, i) => x - t[i]).sort((a, b) => a - b);
+      const q = (p) => d[Math.min(d.length - 1, Math.floor(p * d.length))];
+      return d.length ? { events: t.length, rate_hz: (1000 * d.length) / (t[t.length - 1] - t[0]),
+        median_interval_ms: q(0.5), p95_interval_ms: q(0.95), max_interval_ms: d[d.length - 1] }
+        : { events: t.length };
+    };
+    const a = window.echothigh.arrivals;
+    return { state: summary(a.state), image: summary(a.image), render_3d: summary(a.render),
+      user_agent: navigator.userAgent, webgl_renderer: (() => {
+        const g = document.createElement('canvas').getContext('webgl');
+        const ext = g && g.getExtension('WEBGL_debug_renderer_info');
+        return ext ? g.getParameter(ext.UNMASKED_RENDERER_WEBGL) : null;
+      })() };
+  });
+  writeFileSync(join(shots, 'viewer-rates.json'), JSON.stringify(rates, null, 2));
+  const hz = (r) => (r.rate_hz ? `${r.rate_hz.toFixed(1)} Hz` : 'n/a');
+  console.log(`info page rates: state ${hz(rates.state)}, image ${hz(rates.image)}, 3D render ${hz(rates.render_3d)} (${join(shots, 'viewer-rates.json')})`);
   check('no errors in the page console', consoleErrors.length === 0, consoleErrors.join(' | '));
 } catch (e) {
   exitCode = 1;

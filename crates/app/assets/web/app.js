@@ -18,9 +18,15 @@ const $ = (id) => document.getElementById(id);
 // What the page knows, readable by tests and the console.
 const live = {
   connected: false, hello: null, state: null, lastError: null, errors: 0,
-  imageFrames: 0, surfaceFrames: 0, probe: { theta: 0, z: 0, depth: 0.008, tilt: 0, placed: false },
+  imageFrames: 0, surfaceFrames: 0,
+  // Arrival times (ms, performance.now) of the last 300 states, images and rendered frames.
+  arrivals: { state: [], image: [], render: [] }, probe: { theta: 0, z: 0, depth: 0.008, tilt: 0, placed: false },
 };
 window.echothigh = live;
+function stamp(list) {
+  list.push(performance.now());
+  if (list.length > 300) list.shift();
+}
 
 let scene = null;
 try {
@@ -75,6 +81,7 @@ function onFrame(buf) {
   if (kind === FRAME_IMAGE && buf.byteLength === 16 + a * b) {
     echo.draw(a, b, new Uint8Array(buf, 16, a * b));
     live.imageFrames += 1;
+    stamp(live.arrivals.image);
   } else if (kind === FRAME_SURFACE && buf.byteLength === 16 + 16 * a) {
     if (scene) scene.updateSurface(new Float32Array(buf, 16, 3 * a), new Float32Array(buf, 16 + 12 * a, a));
     live.surfaceFrames += 1;
@@ -85,6 +92,7 @@ function onFrame(buf) {
 let renderedFps = 0;
 function onState(s) {
   live.state = s;
+  stamp(live.arrivals.state);
   const rendered = norm(s.rendered_force), physics = norm(s.physics_force);
   plot.push(s.time, rendered, physics);
   gauge.update(rendered, s.max_force);
@@ -96,7 +104,8 @@ function onState(s) {
 
 function syncControls(s) {
   const idle = (el) => document.activeElement !== el;
-  if (s.vein && idle($('vein'))) $('vein').value = s.vein;
+  if (!s.vein) $('vein').value = ''; // hidden during an exam question
+  else if (idle($('vein'))) $('vein').value = s.vein;
   $('vein').disabled = !s.vein;
   if (s.mode && idle($('mode'))) $('mode').value = s.mode;
   if (idle($('rate'))) { $('rate').value = s.physics_rate_setting; $('rate-v').textContent = s.physics_rate_setting.toFixed(0); }
@@ -217,7 +226,7 @@ $('exam-stop').addEventListener('click', () => send({ type: 'exam_stop' }));
 let fpsWindow = { t: performance.now(), frames: 0, echo: 0 };
 function frame(now) {
   flushProbe();
-  if (scene) scene.render();
+  if (scene) { scene.render(); stamp(live.arrivals.render); }
   plot.draw();
   fpsWindow.frames += 1;
   if (now - fpsWindow.t >= 1000) {

@@ -107,6 +107,10 @@ export class ThighScene {
     this.restMesh.updateMatrixWorld();
     restGeom.computeBoundingBox();
     restGeom.boundingBox.getCenter(this.target);
+    // Semi-axes of the elliptic cross-section (centred on the z axis), for
+    // the parametric angle of a picked point.
+    this.semiX = Math.max(Math.abs(restGeom.boundingBox.min.x), Math.abs(restGeom.boundingBox.max.x));
+    this.semiY = Math.max(Math.abs(restGeom.boundingBox.min.y), Math.abs(restGeom.boundingBox.max.y));
     this.orbit.distance = 3.0 * restGeom.boundingSphere.radius;
   }
 
@@ -160,8 +164,11 @@ export class ThighScene {
     this.raycaster.setFromCamera(ndc, this.camera);
     const hit = this.raycaster.intersectObject(this.restMesh, false)[0];
     if (!hit) return null;
-    // theta: angle about the thigh axis from the anterior (+y) towards +x.
-    return { theta: Math.atan2(hit.point.x, hit.point.y), z: hit.point.z };
+    // theta (LiveCommand::Probe): the ellipse's parametric angle about the
+    // thigh axis, 0 at the anterior (+y) line, increasing towards +x. With the
+    // model's skin x = a cos θ_m, y = b sin θ_m, this is theta = π/2 − θ_m.
+    const theta = Math.atan2(hit.point.x / this.semiX, hit.point.y / this.semiY);
+    return { theta, z: hit.point.z };
   }
 
   rotate(dx, dy) {
