@@ -12,7 +12,10 @@
 //! forward (`n` evaluations) or central (`2n`, second-order accurate), with a
 //! step `ε · max(|θⱼ|, 1)`: the residuals of the calibration come from an
 //! iterative solver, so `ε` must stay well above its tolerance (default
-//! `1e-5`) rather than at `√machine-ε`.
+//! `1e-5`) rather than at `√machine-ε`. A trial point outside the residual's
+//! domain returns non-finite residuals: it is rejected like an uphill step,
+//! and a Jacobian column whose forward point is outside the domain is taken
+//! by a backward difference instead (a fit that starts on a bound).
 
 use nalgebra::{DMatrix, DVector};
 use thiserror::Error;
@@ -177,11 +180,20 @@ where
                 let mut tp = theta.clone();
                 tp[j] += hj;
                 eval(&tp, &mut rp)?;
-                if opts.central {
+                let forward_ok = rp.iter().all(|v| v.is_finite());
+                if opts.central || !forward_ok {
                     let mut tm = theta.clone();
                     tm[j] -= hj;
                     eval(&tm, &mut rm)?;
-                    jac.set_column(j, &((&rp - &rm) / (2.0 * hj)));
+                    let backward_ok = rm.iter().all(|v| v.is_finite());
+                    let col = match (forward_ok, backward_ok) {
+                        (true, true) => (&rp - &rm) / (2.0 * hj),
+                        (true, false) => (&rp - &r) / hj,
+                        (false, true) => (&r - &rm) / hj,
+                        // Both neighbours outside the domain: no information.
+                        (false, false) => DVector::zeros(m),
+                    };
+                    jac.set_column(j, &col);
                 } else {
                     jac.set_column(j, &((&rp - &r) / hj));
                 }

@@ -34,16 +34,78 @@ pub struct SurfacePoint {
     pub triangle: usize,
 }
 
+/// Node → triangle adjacency (CSR) with a per-query visit marker, so that
+/// a triangle shared by several candidate nodes is examined once.
+#[derive(Debug, Clone)]
+pub struct Adjacency {
+    /// `start[i]..start[i+1]` indexes `list` for node `i`.
+    start: Vec<u32>,
+    list: Vec<u32>,
+    stamp: Vec<u32>,
+    epoch: u32,
+}
+
+impl Adjacency {
+    /// The triangles around each of `n` nodes.
+    pub fn new(n: usize, triangles: &[[usize; 3]]) -> Self {
+        let mut start = vec![0u32; n + 1];
+        for t in triangles {
+            for &v in t {
+                start[v + 1] += 1;
+            }
+        }
+        for i in 0..n {
+            start[i + 1] += start[i];
+        }
+        let mut cursor = start.clone();
+        let mut list = vec![0u32; start[n] as usize];
+        for (ti, t) in triangles.iter().enumerate() {
+            for &v in t {
+                list[cursor[v] as usize] = ti as u32;
+                cursor[v] += 1;
+            }
+        }
+        Self {
+            start,
+            list,
+            stamp: vec![0; triangles.len()],
+            epoch: 0,
+        }
+    }
+
+    /// Positions in the adjacency list of node `i`'s triangles.
+    pub fn range(&self, i: usize) -> std::ops::Range<usize> {
+        self.start[i] as usize..self.start[i + 1] as usize
+    }
+
+    /// The triangle at position `k` of the list.
+    pub fn triangle_at(&self, k: usize) -> usize {
+        self.list[k] as usize
+    }
+
+    /// Starts a new query: every triangle becomes unvisited.
+    pub fn next_epoch(&mut self) {
+        self.epoch = self.epoch.wrapping_add(1);
+        if self.epoch == 0 {
+            self.stamp.fill(0);
+            self.epoch = 1;
+        }
+    }
+
+    /// Marks triangle `t` visited; true if it was not yet in this query.
+    pub fn visit(&mut self, t: usize) -> bool {
+        let first = self.stamp[t] != self.epoch;
+        self.stamp[t] = self.epoch;
+        first
+    }
+}
+
 /// Scratch and topology for signed-distance queries; reusable across steps
 /// without allocation.
 #[derive(Debug, Clone)]
 pub struct SurfaceDistance {
     triangles: Vec<[usize; 3]>,
-    /// `tri_start[i]..tri_start[i+1]` indexes `tri_list` for node `i`.
-    tri_start: Vec<u32>,
-    tri_list: Vec<u32>,
-    stamp: Vec<u32>,
-    epoch: u32,
+    adjacency: Adjacency,
     nodes: Vec<usize>,
 }
 
@@ -68,29 +130,9 @@ impl SurfaceDistance {
                 }
             })
             .collect();
-        let mut tri_start = vec![0u32; n + 1];
-        for t in &oriented {
-            for &v in t {
-                tri_start[v + 1] += 1;
-            }
-        }
-        for i in 0..n {
-            tri_start[i + 1] += tri_start[i];
-        }
-        let mut cursor = tri_start.clone();
-        let mut tri_list = vec![0u32; tri_start[n] as usize];
-        for (ti, t) in oriented.iter().enumerate() {
-            for &v in t {
-                tri_list[cursor[v] as usize] = ti as u32;
-                cursor[v] += 1;
-            }
-        }
         Self {
-            stamp: vec![0; oriented.len()],
+            adjacency: Adjacency::new(n, &oriented),
             triangles: oriented,
-            tri_start,
-            tri_list,
-            epoch: 0,
             nodes: Vec::with_capacity(n),
         }
     }
@@ -130,15 +172,14 @@ impl SurfaceDistance {
         let radius = d_node + l_max2.sqrt();
         let mut nodes = std::mem::take(&mut self.nodes);
         grid.query_sphere(x, p, radius * (1.0 + 1e-12), &mut nodes);
-        self.next_epoch();
+        self.adjacency.next_epoch();
         let mut best: Option<(f64, f64, Vector3<f64>, usize)> = None; // (d², |cos|, q, t)
         for &i in &nodes {
-            for k in self.tri_start[i]..self.tri_start[i + 1] {
-                let t = self.tri_list[k as usize] as usize;
-                if self.stamp[t] == self.epoch {
+            for k in self.adjacency.range(i) {
+                let t = self.adjacency.triangle_at(k);
+                if !self.adjacency.visit(t) {
                     continue;
                 }
-                self.stamp[t] = self.epoch;
                 let [a, b, c] = self.triangles[t];
                 let q = closest_on_triangle(p, &x[a], &x[b], &x[c]);
                 let d2 = (p - q).norm_squared();
@@ -169,14 +210,6 @@ impl SurfaceDistance {
             closest: q,
             triangle: t,
         })
-    }
-
-    fn next_epoch(&mut self) {
-        self.epoch = self.epoch.wrapping_add(1);
-        if self.epoch == 0 {
-            self.stamp.fill(0);
-            self.epoch = 1;
-        }
     }
 }
 

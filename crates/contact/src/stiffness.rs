@@ -1,0 +1,170 @@
+//! The local stiffness sent to the haptic side (paper §2: "a linear
+//! approximation of the local stiffness, i.e. rate of change of the force
+//! with respect to a change of position in the direction normal to the
+//! surface"), quasi-static, by a Schur complement.
+//!
+//! Let the probe move by `δ` along `k̂` with the tissue at equilibrium. Each
+//! face sample `j` in contact is a penalty spring of stiffness
+//! `c_j = λ_c a_j` on the surface height `β_jᵀ y` under it; together they
+//! form `C = Σ_j c_j (β_j ⊗ k̂)(β_j ⊗ k̂)ᵀ`. With `T = −∂F_tissue/∂x`, the
+//! equilibrium of the nodes gives `(T + C) w = C 1`, `w = ∂x/∂δ`, `1` the
+//! field equal to `k̂` on the contact nodes (`Σ_m β_jm = 1`). The force on
+//! the tissue is `Σ_j c_j (δ − β_jᵀ k̂·x) k̂`, so
+//!
+//! `k = ∂|F·n|/∂δ = 1ᵀC1 − 1ᵀC(T + C)⁻¹C1 = 1ᵀ C (1 − w)`,
+//!
+//! the Schur complement of the node block: one extra linear solve
+//! ([`ThighModel::solve_stiffness`]). On free nodes `C(1 − w) = T w`, so we
+//! evaluate `k = Σ_m k̂·(T w)_m` over the free contact nodes (fixed ones add
+//! `k̂·(C(1 − w))_m`): with a stiff `λ_c`, `1 − k̂·w` is a small difference
+//! of numbers near 1, while `T w` is of the tissue's own size, so the
+//! solver's tolerance is not amplified by `λ_c / (tissue stiffness)`. For one
+//! node on one spring of stiffness `s` this is `s c / (s + c)`, the two in
+//! series. `n = −k̂` is the outward normal; with `F` the force on the
+//! tissue, `k = −∂(F·n)/∂depth`.
+
+use echothigh_model::{BlockSparse, ForceModel, NoExtraForce, SolveStats, ThighModel, Vec3};
+use nalgebra::Matrix3;
+
+use crate::penalty::PenaltyContact;
+
+/// One linearized penalty spring: stiffness `c` (N/m) on the surface
+/// height `Σ_m β_m k̂·x_m` under a face sample.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactSpring {
+    /// Nodes of the triangle under the sample.
+    pub nodes: [usize; 3],
+    /// Barycentric weights (sum 1).
+    pub beta: [f64; 3],
+    /// Storage indices of the triangle's 9 blocks in the model's pattern.
+    pub blocks: [usize; 9],
+    /// Stiffness `c = λ_c a`, N/m.
+    pub c: f64,
+}
+
+/// A set of contact springs that contributes only its stiffness: the
+/// linearized contact used by the Schur complement, either the actual
+/// contact or the one the probe would meet at first touch.
+#[derive(Debug, Clone)]
+pub struct ContactSet {
+    /// Contact direction `k̂` (unit).
+    pub direction: Vec3,
+    /// The springs.
+    pub springs: Vec<ContactSpring>,
+}
+
+impl ContactSet {
+    /// An empty set with room for `n` springs.
+    pub fn with_capacity(n: usize) -> Self {
+        Self {
+            direction: -Vec3::y(),
+            springs: Vec::with_capacity(n),
+        }
+    }
+
+    /// Empties the set (capacity kept) and sets the direction.
+    pub fn reset(&mut self, direction: Vec3) {
+        self.direction = direction;
+        self.springs.clear();
+    }
+
+    /// `1ᵀC1 = Σ c`, N/m: the stiffness if the tissue were rigid.
+    pub fn rigid_stiffness(&self) -> f64 {
+        self.springs.iter().map(|s| s.c).sum()
+    }
+}
+
+impl ForceModel for ContactSet {
+    /// The linearized set has no force of its own at the linearization point.
+    fn add_forces(&mut self, _x: &[Vec3], _v: &[Vec3], _f: &mut [Vec3]) {}
+
+    fn add_jacobians(
+        &mut self,
+        _x: &[Vec3],
+        _v: &[Vec3],
+        k: &mut BlockSparse,
+        _b: &mut BlockSparse,
+    ) {
+        let kk: Matrix3<f64> = self.direction * self.direction.transpose();
+        for s in &self.springs {
+            PenaltyContact::add_sample_block(k, &s.blocks, &s.beta, &kk, s.c);
+        }
+    }
+}
+
+/// Scratch of the Schur-complement stiffness; allocation-free after `new`.
+#[derive(Debug, Clone)]
+pub struct LocalStiffness {
+    rhs: Vec<Vec3>,
+    w: Vec<Vec3>,
+    tw: Vec<Vec3>,
+    k_tissue: BlockSparse,
+    b_tissue: BlockSparse,
+}
+
+impl LocalStiffness {
+    /// Scratch for `model`.
+    pub fn new(model: &ThighModel) -> Self {
+        let n = model.node_count();
+        let mut pattern = model.pattern().clone();
+        pattern.clear();
+        Self {
+            rhs: vec![Vec3::zeros(); n],
+            w: vec![Vec3::zeros(); n],
+            tw: vec![Vec3::zeros(); n],
+            k_tissue: pattern.clone(),
+            b_tissue: pattern,
+        }
+    }
+
+    /// The quasi-static stiffness `k` (N/m) the probe feels along `k̂` with
+    /// the contact springs `set`, at the model's current state, and the
+    /// statistics of the extra solve. Zero for an empty set. The previous
+    /// solution warm-starts the solve.
+    pub fn compute(&mut self, model: &mut ThighModel, set: &mut ContactSet) -> (f64, SolveStats) {
+        if set.springs.is_empty() {
+            return (0.0, SolveStats::default());
+        }
+        let dir = set.direction;
+        self.rhs.fill(Vec3::zeros());
+        for s in &set.springs {
+            for (&m, &b) in s.nodes.iter().zip(&s.beta) {
+                self.rhs[m] += (s.c * b) * dir;
+            }
+        }
+        if self.w.iter().any(|w| !w.iter().all(|c| c.is_finite())) {
+            self.w.fill(Vec3::zeros());
+        }
+        let stats = model.solve_stiffness(set, &self.rhs, &mut self.w);
+        model.jacobians(&mut NoExtraForce, &mut self.k_tissue, &mut self.b_tissue);
+        self.k_tissue.mul_vec(&self.w, &mut self.tw);
+        let fixed = model.fixed();
+        let mut k = 0.0;
+        // Free contact nodes: T = −K_tissue, so (T w)·k̂ = −(K w)·k̂.
+        for (m, r) in self.rhs.iter().enumerate() {
+            if !fixed[m] && *r != Vec3::zeros() {
+                k -= self.tw[m].dot(&dir);
+            }
+        }
+        // Fixed contact nodes: (C (1 − w))·k̂ directly.
+        for s in &set.springs {
+            let stretch: f64 = s
+                .nodes
+                .iter()
+                .zip(&s.beta)
+                .map(|(&m, &b)| b * dir.dot(&self.w[m]))
+                .sum();
+            for (&m, &b) in s.nodes.iter().zip(&s.beta) {
+                if fixed[m] {
+                    k += s.c * b * (1.0 - stretch);
+                }
+            }
+        }
+        (k, stats)
+    }
+
+    /// `w = ∂x/∂δ` of the last [`Self::compute`] (m per m of probe travel).
+    pub fn node_sensitivity(&self) -> &[Vec3] {
+        &self.w
+    }
+}
