@@ -36,7 +36,7 @@
 use crate::block_sparse::BlockSparse;
 use crate::config::IntegratorParams;
 use crate::force_model::ForceModel;
-use crate::pcg::{Pcg, SolveStats};
+use crate::pcg::{Pcg, PcgParams, SolveStats};
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
 
@@ -53,6 +53,9 @@ pub struct StepStats {
     pub newton_residual: f64,
     /// Times the asymptote limiter cut a Newton update (or the start).
     pub limited: u32,
+    /// Times a linear solve met an indefinite matrix and was retried with a
+    /// larger mass term (see [`ImplicitEuler::step`]).
+    pub regularized: u32,
     /// True if Newton met its tolerance within the cap.
     pub converged: bool,
     /// False if the step produced a non-finite state; the state was then
@@ -179,7 +182,12 @@ impl ImplicitEuler {
             if it == params.newton_max_iterations || !r_norm.is_finite() {
                 break;
             }
-            let solve = self.newton_solve(&sys, h, lambda, it == 0, &pcg, forces);
+            // Inexact Newton: no need to solve below what Newton asks for.
+            let pcg_k = PcgParams {
+                tol: pcg.tol.max(0.5 * params.newton_tol * r_first / r_norm),
+                ..pcg
+            };
+            let solve = self.newton_solve(&sys, h, lambda, it == 0, &pcg_k, forces, &mut stats);
             stats.newton_iterations += 1;
             stats.cg_iterations += solve.iterations;
             stats.cg_residual = solve.residual;
@@ -244,14 +252,21 @@ impl ImplicitEuler {
     }
 
     /// Assembles `M − λ h B − λ² h² K` at the evaluation point and solves for δ.
+    ///
+    /// If PCG meets a non-positive curvature (compressed springs' geometric
+    /// stiffness can make the matrix indefinite), the solve is retried with
+    /// the mass term scaled by `1 + μ`, μ = 1, 4, 16, 64 (a Levenberg-style
+    /// shift: the Newton direction is damped, the residual stays exact).
+    #[allow(clippy::too_many_arguments)]
     fn newton_solve(
         &mut self,
         sys: &Dynamics<'_>,
         h: f64,
         lambda: f64,
         first: bool,
-        pcg: &crate::pcg::PcgParams,
+        pcg: &PcgParams,
         forces: &mut dyn ForceModel,
+        stats: &mut StepStats,
     ) -> SolveStats {
         self.k.clear();
         self.b.clear();
@@ -263,9 +278,26 @@ impl ImplicitEuler {
         } else {
             self.delta.fill(Vec3::zeros());
         }
-        let solve = self
+        let mut solve = self
             .pcg
             .solve(&self.a, &self.r, &mut self.delta, sys.fixed, pcg);
+        let mut shift = 1.0;
+        while solve.indefinite && shift <= 64.0 {
+            stats.regularized += 1;
+            for (d, m) in self.zero_diag.iter_mut().zip(sys.mass) {
+                *d = m * (1.0 + shift);
+            }
+            self.a.set_combination(ck, &self.k, cb, &self.b, &self.zero_diag);
+            self.delta.fill(Vec3::zeros());
+            let retry = self
+                .pcg
+                .solve(&self.a, &self.r, &mut self.delta, sys.fixed, pcg);
+            solve = SolveStats {
+                iterations: solve.iterations + retry.iterations,
+                ..retry
+            };
+            shift *= 4.0;
+        }
         if first {
             self.warm.copy_from_slice(&self.delta);
         }
@@ -323,7 +355,11 @@ impl ImplicitEuler {
         self.zero_diag.fill(0.0);
         self.a
             .set_combination(-1.0, &self.k, 0.0, &self.b, &self.zero_diag);
-        self.pcg.solve(&self.a, rhs, out, fixed, &params.pcg())
+        let pcg = PcgParams {
+            tol: params.stiffness_tol,
+            ..params.pcg()
+        };
+        self.pcg.solve(&self.a, rhs, out, fixed, &pcg)
     }
 
     /// The last assembled `K = ∂F/∂x` (N/m), for diagnostics and tests.

@@ -110,11 +110,38 @@ impl ThighModel {
     /// Dirichlet-filtered: `rhs` in N, `out` in m (warm start and result).
     /// Contact uses it for the quasi-static local stiffness (a Schur
     /// complement: `k = 1 / (nᵀ (−K)⁻¹ n)` for a unit load pattern `n`).
-    /// Allocates nothing.
+    /// Allocates nothing. If `−K` is indefinite (compressed springs'
+    /// geometric stiffness), the solve is redone without that term and the
+    /// returned stats have `indefinite = true` (the result is then the
+    /// compliance of the positive-definite part).
     ///
     /// # Panics
     /// If `rhs` or `out` is not of length [`Self::node_count`].
     pub fn solve_stiffness(
+        &mut self,
+        extra: &mut dyn ForceModel,
+        rhs: &[Vec3],
+        out: &mut [Vec3],
+    ) -> SolveStats {
+        let full = self.tissue.geometric_in_compression();
+        let mut stats = self.stiffness_solve(extra, rhs, out);
+        if stats.indefinite && full {
+            // Compressed springs made −K indefinite: drop their geometric
+            // term (−K of the tissue is then positive semi-definite).
+            self.tissue.set_geometric_in_compression(false);
+            out.fill(Vec3::zeros());
+            let retry = self.stiffness_solve(extra, rhs, out);
+            self.tissue.set_geometric_in_compression(true);
+            stats = SolveStats {
+                iterations: stats.iterations + retry.iterations,
+                ..retry
+            };
+            stats.indefinite = true;
+        }
+        stats
+    }
+
+    fn stiffness_solve(
         &mut self,
         extra: &mut dyn ForceModel,
         rhs: &[Vec3],

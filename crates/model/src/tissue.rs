@@ -134,6 +134,17 @@ impl TissueForces {
         }
     }
 
+    /// Whether compressed springs' geometric stiffness goes into `K`.
+    pub fn geometric_in_compression(&self) -> bool {
+        self.geometric_in_compression
+    }
+
+    /// Sets whether compressed springs' geometric stiffness goes into `K`
+    /// (without it `−K` of the tissue is positive semi-definite).
+    pub fn set_geometric_in_compression(&mut self, on: bool) {
+        self.geometric_in_compression = on;
+    }
+
     /// Elastic potential energy (J) of all springs at positions `x` (m).
     /// Infinite if a normal spring is at or past its asymptote.
     pub fn potential_energy(&self, x: &[Vec3]) -> f64 {

@@ -1,10 +1,85 @@
-//! Placeholder: owned by the helper building this part (see docs/ARCHITECTURE.md).
+//! `echothigh bench physics`: time per implicit step (median, p90), PCG and
+//! Newton iterations per step and steps per second, for meshes of about 500,
+//! 1 000 (the default), 2 000, 8 000, 10 000 and 32 000 nodes, in three
+//! scenarios (free motion under gravity, a constant 10 N probe-patch load, a
+//! 0–15 N press at 1 Hz; see `echothigh_model::bench`). One run's numbers,
+//! wall-clock time on one thread: the machine may be shared, read them as such.
 
-/// Arguments.
+use std::path::PathBuf;
+
+use anyhow::Context;
+use echothigh_model::bench::{run_case, CaseReport, Scenario, SIZES};
+
+/// Arguments of `echothigh bench physics`.
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// Print the JSON report on stdout (the human table always goes to stderr).
+    #[arg(long)]
+    json: bool,
+    /// Also write the JSON report to this file.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Skip meshes with more nodes than this.
+    #[arg(long, default_value_t = usize::MAX)]
+    max_nodes: usize,
+    /// Multiply every case's number of measured steps by this (≥ 1 step each).
+    #[arg(long, default_value_t = 1.0)]
+    steps_scale: f64,
+    /// Untimed steps before the measured ones.
+    #[arg(long, default_value_t = 3)]
+    warmup: usize,
+}
 
-/// Runs the command.
-pub fn run(_args: Args) -> anyhow::Result<()> {
-    anyhow::bail!("not built yet")
+/// Runs the benchmark, prints the table on stderr, writes/prints the JSON.
+pub fn run(args: Args) -> anyhow::Result<()> {
+    if !(args.steps_scale.is_finite() && args.steps_scale > 0.0) {
+        anyhow::bail!("--steps-scale must be > 0, got {}", args.steps_scale);
+    }
+    let mut cases = Vec::new();
+    eprintln!(
+        "{:<6} {:>6}  {:>11} {:>11} {:>10} {:>9} {:>7} {:>7}",
+        "case", "nodes", "median µs", "p90 µs", "steps/s", "CG/step", "Newton", "limited"
+    );
+    for &(nt, nz, steps) in SIZES.iter().filter(|(nt, nz, _)| nt * nz <= args.max_nodes) {
+        let steps = ((steps as f64 * args.steps_scale).round() as usize).max(1);
+        for scenario in Scenario::ALL {
+            let r = run_case(scenario, nt, nz, steps, args.warmup)
+                .with_context(|| format!("building the {nt}×{nz} mesh"))?;
+            print_row(&r);
+            cases.push(r);
+        }
+    }
+    let json = serde_json::json!({
+        "bench": "physics",
+        "profile": if cfg!(debug_assertions) { "debug" } else { "release" },
+        "threads": 1,
+        "goals": { "default_mesh_steps_per_s": 1000.0, "nodes_10k_steps_per_s": 100.0 },
+        "cases": cases,
+    });
+    let text = serde_json::to_string_pretty(&json)?;
+    if let Some(path) = &args.out {
+        std::fs::write(path, &text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    if args.json {
+        println!("{text}");
+    }
+    Ok(())
+}
+
+fn print_row(r: &CaseReport) {
+    let name = match r.scenario {
+        Scenario::Free => "free",
+        Scenario::Load => "load",
+        Scenario::Press => "press",
+    };
+    eprintln!(
+        "{name:<6} {:>6}  {:>11.1} {:>11.1} {:>10.1} {:>9.1} {:>7.2} {:>7}",
+        r.nodes,
+        r.median_us,
+        r.p90_us,
+        r.steps_per_s,
+        r.cg_iterations_mean,
+        r.newton_iterations_mean,
+        r.limited_total
+    );
 }

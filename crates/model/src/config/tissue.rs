@@ -6,6 +6,11 @@ use serde::{Deserialize, Serialize};
 
 /// Tissue parameters, all resolution independent.
 ///
+/// **Calibrated defaults.** `normal_a`, `normal_b` and `structural_stiffness`
+/// are the Levenberg–Marquardt fit (`echothigh calibrate`, crate
+/// `echothigh-contact`) of `data/indentation-default.csv` with
+/// `tangential_stiffness` held at 1e6.
+///
 /// **Masses.** Node mass = `areal_density` × node area (kg).
 ///
 /// **Linear springs** `f = a x` (paper §3) along the mesh edges, with a
@@ -36,7 +41,7 @@ use serde::{Deserialize, Serialize};
 pub struct TissueParams {
     /// Mass per unit skin area carried by the surface nodes (kg/m²). Default 10.
     pub areal_density: f64,
-    /// Membrane modulus of the structural springs (θ and z neighbours) (N/m). Default 200.
+    /// Membrane modulus of the structural springs (θ and z neighbours) (N/m). Default 193.5 (calibrated, see below).
     pub structural_stiffness: f64,
     /// Membrane modulus of the shear springs (quad diagonals) (N/m). Default 50.
     pub shear_stiffness: f64,
@@ -48,15 +53,17 @@ pub struct TissueParams {
     pub shear_damping: f64,
     /// Damping modulus of the bending springs' dampers (N·s/m). Default 0.02.
     pub bending_damping: f64,
-    /// Normal spring `a` per unit area (m²/N = 1/Pa). Default 5.0e-5.
+    /// Normal spring `a` per unit area (m²/N = 1/Pa). Default 5.303e-5.
     pub normal_a: f64,
     /// Normal spring `b` per unit area (m³/N = m/Pa): `1/normal_b` is the
-    /// initial stiffness per unit area. Default 1.5e-6 (asymptote 30 mm).
+    /// initial stiffness per unit area. Default 2.121e-6 (asymptote 40.0 mm).
     pub normal_b: f64,
     /// Normal damper per unit area (N·s/m³): node damping = this × node area. Default 2000.
     pub normal_damping: f64,
     /// Tangential (shear) stiffness of the tissue layer per unit area (N/m³):
-    /// node value = this × node area. Default 1.0e5 (≈ G/thickness for G ≈ 4 kPa).
+    /// node value = this × node area. Default 1.0e6 (raised from 1e5 by the
+    /// calibration: with less, the skin under a pressed probe slides sideways
+    /// past ~15 mm on the default mesh).
     pub tangential_stiffness: f64,
     /// Tangential damping per unit area (N·s/m³). Default 500.
     pub tangential_damping: f64,
@@ -69,16 +76,16 @@ impl Default for TissueParams {
     fn default() -> Self {
         TissueParams {
             areal_density: 10.0,
-            structural_stiffness: 200.0,
+            structural_stiffness: 193.5,
             shear_stiffness: 50.0,
             bending_stiffness: 20.0,
             structural_damping: 0.2,
             shear_damping: 0.05,
             bending_damping: 0.02,
-            normal_a: 5.0e-5,
-            normal_b: 1.5e-6,
+            normal_a: 5.303e-5,
+            normal_b: 2.121e-6,
             normal_damping: 2000.0,
-            tangential_stiffness: 1.0e5,
+            tangential_stiffness: 1.0e6,
             tangential_damping: 500.0,
             gravity: [0.0, 0.0, 0.0],
         }

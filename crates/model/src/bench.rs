@@ -1,0 +1,197 @@
+//! Benchmark scenarios of the physics step (timed with `std::time::Instant`,
+//! no I/O): used by `echothigh bench physics` and the crate's example and
+//! criterion bench, so every front end times the same thing.
+//!
+//! Scenarios, all with the default tissue and integrator, `h` = 10 ms,
+//! starting at rest:
+//! - `free`: gravity on (−9.81 m/s² along y); the thigh sags under its own
+//!   weight and oscillates (damped): free motion with no external force.
+//! - `load`: gravity off, a constant inward nodal load of 10 N in total
+//!   spread over the nodes under a 40 × 10 mm patch on the anterior line at
+//!   mid-length (at least the nearest node and its two θ-neighbours):
+//!   Newton and PCG work while the skin is pushed in and settles.
+//! - `press`: the same patch with a load `15 N · ½(1 − cos 2π f t)` at
+//!   f = 1 Hz: the tissue is never at rest (a probe pressing and releasing).
+
+use crate::config::{ConfigError, ModelConfig};
+use crate::force_model::NoExtraForce;
+use crate::thigh::ThighModel;
+use crate::Vec3;
+use serde::Serialize;
+use std::time::Instant;
+
+/// Which load a benchmark case applies.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Scenario {
+    /// Gravity, no external load.
+    Free,
+    /// Constant 10 N on the probe patch.
+    Load,
+    /// 0–15 N at 1 Hz on the probe patch.
+    Press,
+}
+
+impl Scenario {
+    /// All scenarios.
+    pub const ALL: [Scenario; 3] = [Scenario::Free, Scenario::Load, Scenario::Press];
+}
+
+/// Mesh sizes `(n_θ, n_z, measured steps)`: ≈ 500, 1 000 (the default mesh),
+/// 2 000, 8 000, 10 000 and 32 000 nodes, with cells ≈ 1.5 : 1 to 1 : 1.
+pub const SIZES: [(usize, usize, usize); 6] = [
+    (32, 16, 400),
+    (48, 21, 400),
+    (64, 32, 200),
+    (128, 63, 60),
+    (128, 79, 50),
+    (256, 125, 15),
+];
+
+/// Timings and solver counts of one case.
+#[derive(Debug, Clone, Serialize)]
+pub struct CaseReport {
+    /// Scenario.
+    pub scenario: Scenario,
+    /// Nodes (`n_theta · n_z`).
+    pub nodes: usize,
+    /// Nodes around.
+    pub n_theta: usize,
+    /// Rings along z.
+    pub n_z: usize,
+    /// Measured steps (after warm-up).
+    pub steps: usize,
+    /// Time step (s).
+    pub h: f64,
+    /// Median time per step (µs).
+    pub median_us: f64,
+    /// 90th percentile time per step (µs).
+    pub p90_us: f64,
+    /// Mean time per step (µs).
+    pub mean_us: f64,
+    /// Slowest step (µs).
+    pub max_us: f64,
+    /// Steps per second, `1e6 / mean_us`.
+    pub steps_per_s: f64,
+    /// Mean PCG iterations per step (all Newton iterations).
+    pub cg_iterations_mean: f64,
+    /// Most PCG iterations in one step.
+    pub cg_iterations_max: u32,
+    /// Mean Newton iterations (linear solves) per step.
+    pub newton_iterations_mean: f64,
+    /// Total asymptote-limiter activations.
+    pub limited_total: u32,
+    /// Fraction of steps whose Newton met its tolerance.
+    pub converged_fraction: f64,
+}
+
+/// Builds the model of a case (default parameters, `n_θ × n_z`, gravity for `Free`).
+pub fn case_model(scenario: Scenario, n_theta: usize, n_z: usize) -> Result<ThighModel, ConfigError> {
+    let mut config = ModelConfig::default();
+    config.thigh.n_theta = n_theta;
+    config.thigh.n_z = n_z;
+    if scenario == Scenario::Free {
+        config.tissue.gravity = [0.0, -9.81, 0.0];
+    }
+    ThighModel::new(&config)
+}
+
+/// Nodes under a 40 × 10 mm patch (40 mm around θ, 10 mm along z) centred
+/// on the anterior line at mid-length; at least the nearest node and its two
+/// θ-neighbours.
+pub fn probe_patch(model: &ThighModel) -> Vec<usize> {
+    let mesh = model.mesh();
+    let centre = mesh.rest_positions()[mesh.node_at(std::f64::consts::FRAC_PI_2, 0.0)];
+    let mut nodes: Vec<usize> = (0..mesh.node_count())
+        .filter(|&k| {
+            let p = mesh.rest_positions()[k];
+            (p.x - centre.x).abs() <= 0.020 && (p.z - centre.z).abs() <= 0.005 && p.y > 0.0
+        })
+        .collect();
+    if nodes.len() < 3 {
+        let (it, iz) = mesh.grid_index(mesh.node_at(std::f64::consts::FRAC_PI_2, 0.0));
+        nodes = [mesh.n_theta() - 1, 0, 1]
+            .iter()
+            .map(|d| mesh.node_index(it + d, iz))
+            .collect();
+    }
+    nodes
+}
+
+/// Sets an inward load of `total` newtons spread evenly over `patch`.
+pub fn apply_patch_load(model: &mut ThighModel, patch: &[usize], total: f64) {
+    let normals: Vec<Vec3> = patch.iter().map(|&k| model.mesh().rest_normals()[k]).collect();
+    let share = total / patch.len() as f64;
+    let ext = model.external_forces_mut();
+    for (&k, n) in patch.iter().zip(&normals) {
+        ext[k] = -n * share;
+    }
+}
+
+/// Runs `warmup` then `steps` timed steps of a case.
+pub fn run_case(
+    scenario: Scenario,
+    n_theta: usize,
+    n_z: usize,
+    steps: usize,
+    warmup: usize,
+) -> Result<CaseReport, ConfigError> {
+    let mut model = case_model(scenario, n_theta, n_z)?;
+    let h = model.config().integrator.time_step;
+    let patch = probe_patch(&model);
+    let load = |model: &mut ThighModel, t: f64| match scenario {
+        Scenario::Free => {}
+        Scenario::Load => apply_patch_load(model, &patch, 10.0),
+        Scenario::Press => {
+            let f = 15.0 * 0.5 * (1.0 - (std::f64::consts::TAU * t).cos());
+            apply_patch_load(model, &patch, f);
+        }
+    };
+    let mut times = Vec::with_capacity(steps);
+    let (mut cg, mut cg_max, mut newton, mut limited, mut converged) = (0u64, 0u32, 0u64, 0u32, 0);
+    for i in 0..warmup + steps {
+        let t = model.time();
+        load(&mut model, t);
+        let start = Instant::now();
+        let s = model.step(h, &mut NoExtraForce);
+        let elapsed = start.elapsed().as_secs_f64() * 1e6;
+        if i >= warmup {
+            times.push(elapsed);
+            cg += u64::from(s.cg_iterations);
+            cg_max = cg_max.max(s.cg_iterations);
+            newton += u64::from(s.newton_iterations);
+            limited += s.limited;
+            converged += usize::from(s.converged);
+        }
+    }
+    let n = times.len().max(1) as f64;
+    let mean = times.iter().sum::<f64>() / n;
+    times.sort_by(f64::total_cmp);
+    Ok(CaseReport {
+        scenario,
+        nodes: model.node_count(),
+        n_theta,
+        n_z,
+        steps,
+        h,
+        median_us: percentile(&times, 0.5),
+        p90_us: percentile(&times, 0.9),
+        mean_us: mean,
+        max_us: times.last().copied().unwrap_or(0.0),
+        steps_per_s: if mean > 0.0 { 1e6 / mean } else { 0.0 },
+        cg_iterations_mean: cg as f64 / n,
+        cg_iterations_max: cg_max,
+        newton_iterations_mean: newton as f64 / n,
+        limited_total: limited,
+        converged_fraction: converged as f64 / n,
+    })
+}
+
+/// Nearest-rank percentile of sorted samples (0 if empty).
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    sorted[rank - 1]
+}
