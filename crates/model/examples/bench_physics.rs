@@ -16,9 +16,10 @@ fn main() {
             match run_case(scenario, nt, nz, steps, 3) {
                 Ok(r) => {
                     eprintln!(
-                        "{:<6} {:>6} nodes  median {:>9.1} µs  p90 {:>9.1} µs  {:>8.1} steps/s  CG/step {:>6.1}  Newton/step {:.2}  limited {}",
-                        format!("{:?}", r.scenario), r.nodes, r.median_us, r.p90_us,
-                        r.steps_per_s, r.cg_iterations_mean, r.newton_iterations_mean, r.limited_total
+                        "{:<6} {:>6} nodes  wall median {:>8.1} µs p90 {:>8.1} µs {:>7.1} steps/s | CPU median {:>8.1} µs p90 {:>8.1} µs {:>7.1} steps/s | CG/step {:>5.1} Newton/step {:.2} limited {}",
+                        format!("{:?}", r.scenario), r.nodes, r.median_us, r.p90_us, r.steps_per_s,
+                        r.cpu_median_us, r.cpu_p90_us, r.cpu_steps_per_s,
+                        r.cg_iterations_mean, r.newton_iterations_mean, r.limited_total
                     );
                     reports.push(r);
                 }

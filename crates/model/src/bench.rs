@@ -1,5 +1,5 @@
-//! Benchmark scenarios of the physics step (timed with `std::time::Instant`,
-//! no I/O): used by `echothigh bench physics` and the crate's example and
+//! Benchmark scenarios of the physics step (timed with `std::time::Instant`
+//! and the thread's CPU clock, no I/O): used by `echothigh bench physics` and the crate's example and
 //! criterion bench, so every front end times the same thing.
 //!
 //! Scenarios, all with the default tissue and integrator, `h` = 10 ms,
@@ -73,6 +73,13 @@ pub struct CaseReport {
     pub max_us: f64,
     /// Steps per second, `1e6 / mean_us`.
     pub steps_per_s: f64,
+    /// Median thread CPU time per step (µs): per-core cost, insensitive to
+    /// other processes on a shared machine (0 where not available).
+    pub cpu_median_us: f64,
+    /// 90th percentile thread CPU time per step (µs).
+    pub cpu_p90_us: f64,
+    /// Steps per second of CPU time, `1e6 / mean CPU µs`.
+    pub cpu_steps_per_s: f64,
     /// Mean PCG iterations per step (all Newton iterations).
     pub cg_iterations_mean: f64,
     /// Most PCG iterations in one step.
@@ -86,7 +93,11 @@ pub struct CaseReport {
 }
 
 /// Builds the model of a case (default parameters, `n_θ × n_z`, gravity for `Free`).
-pub fn case_model(scenario: Scenario, n_theta: usize, n_z: usize) -> Result<ThighModel, ConfigError> {
+pub fn case_model(
+    scenario: Scenario,
+    n_theta: usize,
+    n_z: usize,
+) -> Result<ThighModel, ConfigError> {
     let mut config = ModelConfig::default();
     config.thigh.n_theta = n_theta;
     config.thigh.n_z = n_z;
@@ -120,7 +131,10 @@ pub fn probe_patch(model: &ThighModel) -> Vec<usize> {
 
 /// Sets an inward load of `total` newtons spread evenly over `patch`.
 pub fn apply_patch_load(model: &mut ThighModel, patch: &[usize], total: f64) {
-    let normals: Vec<Vec3> = patch.iter().map(|&k| model.mesh().rest_normals()[k]).collect();
+    let normals: Vec<Vec3> = patch
+        .iter()
+        .map(|&k| model.mesh().rest_normals()[k])
+        .collect();
     let share = total / patch.len() as f64;
     let ext = model.external_forces_mut();
     for (&k, n) in patch.iter().zip(&normals) {
@@ -148,15 +162,20 @@ pub fn run_case(
         }
     };
     let mut times = Vec::with_capacity(steps);
+    let mut cpu = Vec::with_capacity(steps);
     let (mut cg, mut cg_max, mut newton, mut limited, mut converged) = (0u64, 0u32, 0u64, 0u32, 0);
     for i in 0..warmup + steps {
         let t = model.time();
         load(&mut model, t);
-        let start = Instant::now();
+        let (start, cpu_start) = (Instant::now(), thread_cpu_us());
         let s = model.step(h, &mut NoExtraForce);
-        let elapsed = start.elapsed().as_secs_f64() * 1e6;
+        let (elapsed, cpu_elapsed) = (
+            start.elapsed().as_secs_f64() * 1e6,
+            thread_cpu_us() - cpu_start,
+        );
         if i >= warmup {
             times.push(elapsed);
+            cpu.push(cpu_elapsed);
             cg += u64::from(s.cg_iterations);
             cg_max = cg_max.max(s.cg_iterations);
             newton += u64::from(s.newton_iterations);
@@ -167,6 +186,8 @@ pub fn run_case(
     let n = times.len().max(1) as f64;
     let mean = times.iter().sum::<f64>() / n;
     times.sort_by(f64::total_cmp);
+    let cpu_mean = cpu.iter().sum::<f64>() / n;
+    cpu.sort_by(f64::total_cmp);
     Ok(CaseReport {
         scenario,
         nodes: model.node_count(),
@@ -179,6 +200,9 @@ pub fn run_case(
         mean_us: mean,
         max_us: times.last().copied().unwrap_or(0.0),
         steps_per_s: if mean > 0.0 { 1e6 / mean } else { 0.0 },
+        cpu_median_us: percentile(&cpu, 0.5),
+        cpu_p90_us: percentile(&cpu, 0.9),
+        cpu_steps_per_s: if cpu_mean > 0.0 { 1e6 / cpu_mean } else { 0.0 },
         cg_iterations_mean: cg as f64 / n,
         cg_iterations_max: cg_max,
         newton_iterations_mean: newton as f64 / n,
@@ -194,4 +218,26 @@ fn percentile(sorted: &[f64], q: f64) -> f64 {
     }
     let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
     sorted[rank - 1]
+}
+
+/// CPU time consumed by the calling thread (µs), 0 where unavailable.
+#[cfg(target_os = "linux")]
+pub fn thread_cpu_us() -> f64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec; the clock id is a constant.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    if rc == 0 {
+        ts.tv_sec as f64 * 1e6 + ts.tv_nsec as f64 * 1e-3
+    } else {
+        0.0
+    }
+}
+
+/// CPU time consumed by the calling thread (µs), 0 where unavailable.
+#[cfg(not(target_os = "linux"))]
+pub fn thread_cpu_us() -> f64 {
+    0.0
 }

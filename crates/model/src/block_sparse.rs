@@ -181,7 +181,8 @@ impl BlockSparse {
         b: &BlockSparse,
         diag: &[f64],
     ) {
-        assert!(self.same_pattern(a) && self.same_pattern(b));
+        assert!(self.values.len() == a.values.len() && self.values.len() == b.values.len());
+        debug_assert!(self.same_pattern(a) && self.same_pattern(b));
         assert_eq!(diag.len(), self.n());
         for ((out, ka), kb) in self.values.iter_mut().zip(&a.values).zip(&b.values) {
             *out = ka * alpha + kb * beta;
@@ -191,6 +192,32 @@ impl BlockSparse {
             self.values[k][(0, 0)] += d;
             self.values[k][(1, 1)] += d;
             self.values[k][(2, 2)] += d;
+        }
+    }
+
+    /// `self += α·a + β·b` (same pattern).
+    ///
+    /// # Panics
+    /// If a pattern differs.
+    pub fn add_scaled(&mut self, alpha: f64, a: &BlockSparse, beta: f64, b: &BlockSparse) {
+        assert!(self.values.len() == a.values.len() && self.values.len() == b.values.len());
+        debug_assert!(self.same_pattern(a) && self.same_pattern(b));
+        for ((out, ka), kb) in self.values.iter_mut().zip(&a.values).zip(&b.values) {
+            *out += ka * alpha + kb * beta;
+        }
+    }
+
+    /// Adds `d_i · I` to each diagonal block (e.g. the lumped masses, kg).
+    ///
+    /// # Panics
+    /// If `d.len() != self.n()`.
+    pub fn add_to_diagonal(&mut self, d: &[f64]) {
+        assert_eq!(d.len(), self.n());
+        for (&k, &di) in self.diag.iter().zip(d) {
+            let m = &mut self.values[k];
+            m[(0, 0)] += di;
+            m[(1, 1)] += di;
+            m[(2, 2)] += di;
         }
     }
 

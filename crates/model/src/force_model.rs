@@ -19,12 +19,52 @@ pub trait ForceModel {
     /// of the fixed pattern (the diagonal and the mesh edges) may be written.
     fn add_jacobians(&mut self, x: &[Vec3], v: &[Vec3], k: &mut BlockSparse, b: &mut BlockSparse);
 
+    /// Adds `α ∂F/∂x + β ∂F/∂v` into `a` (the implicit integrator's
+    /// combination, e.g. `α = −λ²h²`, `β = −λh`; units those of `α·N/m`).
+    ///
+    /// The default assembles into `scratch` (cleared here) with
+    /// [`Self::add_jacobians`] and accumulates the whole pattern into `a`; a
+    /// model that touches few blocks should override it and write `a`
+    /// directly (it is called once per Newton iteration).
+    fn add_scaled_jacobians(
+        &mut self,
+        x: &[Vec3],
+        v: &[Vec3],
+        alpha: f64,
+        beta: f64,
+        a: &mut BlockSparse,
+        scratch: &mut JacobianScratch,
+    ) {
+        scratch.k.clear();
+        scratch.b.clear();
+        self.add_jacobians(x, v, &mut scratch.k, &mut scratch.b);
+        a.add_scaled(alpha, &scratch.k, beta, &scratch.b);
+    }
+
     /// Largest fraction `α ∈ [0, 1]` of the position change `dx` (m) from `x`
     /// that keeps this model in its valid domain along the whole path
     /// `x + s·dx, s ∈ [0, α]` (e.g. below a spring's asymptote). Default 1.
     fn max_step_fraction(&self, x: &[Vec3], dx: &[Vec3]) -> f64 {
         let _ = (x, dx);
         1.0
+    }
+}
+
+/// Scratch matrices for [`ForceModel::add_scaled_jacobians`]'s default.
+#[derive(Debug, Clone)]
+pub struct JacobianScratch {
+    /// `∂F/∂x` (N/m).
+    pub k: BlockSparse,
+    /// `∂F/∂v` (N·s/m).
+    pub b: BlockSparse,
+}
+
+impl JacobianScratch {
+    /// Zeroed matrices of `pattern`'s pattern.
+    pub fn new(pattern: &BlockSparse) -> Self {
+        let mut k = pattern.clone();
+        k.clear();
+        JacobianScratch { b: k.clone(), k }
     }
 }
 
@@ -40,6 +80,17 @@ impl ForceModel for NoExtraForce {
         _v: &[Vec3],
         _k: &mut BlockSparse,
         _b: &mut BlockSparse,
+    ) {
+    }
+
+    fn add_scaled_jacobians(
+        &mut self,
+        _x: &[Vec3],
+        _v: &[Vec3],
+        _alpha: f64,
+        _beta: f64,
+        _a: &mut BlockSparse,
+        _scratch: &mut JacobianScratch,
     ) {
     }
 }
@@ -61,6 +112,21 @@ impl ForceModel for SumForce<'_> {
     fn add_jacobians(&mut self, x: &[Vec3], v: &[Vec3], k: &mut BlockSparse, b: &mut BlockSparse) {
         self.first.add_jacobians(x, v, k, b);
         self.second.add_jacobians(x, v, k, b);
+    }
+
+    fn add_scaled_jacobians(
+        &mut self,
+        x: &[Vec3],
+        v: &[Vec3],
+        alpha: f64,
+        beta: f64,
+        a: &mut BlockSparse,
+        scratch: &mut JacobianScratch,
+    ) {
+        self.first
+            .add_scaled_jacobians(x, v, alpha, beta, a, scratch);
+        self.second
+            .add_scaled_jacobians(x, v, alpha, beta, a, scratch);
     }
 
     fn max_step_fraction(&self, x: &[Vec3], dx: &[Vec3]) -> f64 {

@@ -35,7 +35,7 @@
 
 use crate::block_sparse::BlockSparse;
 use crate::config::IntegratorParams;
-use crate::force_model::ForceModel;
+use crate::force_model::{ForceModel, JacobianScratch};
 use crate::pcg::{Pcg, PcgParams, SolveStats};
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
@@ -82,8 +82,7 @@ pub struct Dynamics<'a> {
 /// Implicit Euler with Newton and PCG; owns only scratch memory.
 #[derive(Debug, Clone)]
 pub struct ImplicitEuler {
-    k: BlockSparse,
-    b: BlockSparse,
+    scratch: JacobianScratch,
     a: BlockSparse,
     pcg: Pcg,
     x0: Vec<Vec3>,
@@ -96,7 +95,7 @@ pub struct ImplicitEuler {
     x_eval: Vec<Vec3>,
     v_eval: Vec<Vec3>,
     path: Vec<Vec3>,
-    zero_diag: Vec<f64>,
+    diag_scratch: Vec<f64>,
 }
 
 /// `v[i] = 0` where `fixed[i]`.
@@ -112,13 +111,11 @@ impl ImplicitEuler {
     /// Scratch for systems with the block pattern of `pattern` (allocates once).
     pub fn new(pattern: &BlockSparse) -> Self {
         let n = pattern.n();
-        let mut zero = pattern.clone();
-        zero.clear();
+        let scratch = JacobianScratch::new(pattern);
         let vecs = || vec![Vec3::zeros(); n];
         ImplicitEuler {
-            k: zero.clone(),
-            b: zero.clone(),
-            a: zero,
+            a: scratch.k.clone(),
+            scratch,
             pcg: Pcg::new(n),
             x0: vecs(),
             v0: vecs(),
@@ -130,7 +127,7 @@ impl ImplicitEuler {
             x_eval: vecs(),
             v_eval: vecs(),
             path: vecs(),
-            zero_diag: vec![0.0; n],
+            diag_scratch: vec![0.0; n],
         }
     }
 
@@ -268,11 +265,17 @@ impl ImplicitEuler {
         forces: &mut dyn ForceModel,
         stats: &mut StepStats,
     ) -> SolveStats {
-        self.k.clear();
-        self.b.clear();
-        forces.add_jacobians(&self.x_eval, &self.v_eval, &mut self.k, &mut self.b);
         let (ck, cb) = (-lambda * lambda * h * h, -lambda * h);
-        self.a.set_combination(ck, &self.k, cb, &self.b, sys.mass);
+        self.a.clear();
+        self.a.add_to_diagonal(sys.mass);
+        forces.add_scaled_jacobians(
+            &self.x_eval,
+            &self.v_eval,
+            ck,
+            cb,
+            &mut self.a,
+            &mut self.scratch,
+        );
         if first {
             self.delta.copy_from_slice(&self.warm);
         } else {
@@ -281,13 +284,15 @@ impl ImplicitEuler {
         let mut solve = self
             .pcg
             .solve(&self.a, &self.r, &mut self.delta, sys.fixed, pcg);
-        let mut shift = 1.0;
-        while solve.indefinite && shift <= 64.0 {
+        let mut shift = 0.0;
+        while solve.indefinite && shift < 64.0 {
             stats.regularized += 1;
-            for (d, m) in self.zero_diag.iter_mut().zip(sys.mass) {
-                *d = m * (1.0 + shift);
+            let next = if shift == 0.0 { 1.0 } else { 4.0 * shift };
+            for (d, m) in self.diag_scratch.iter_mut().zip(sys.mass) {
+                *d = m * (next - shift);
             }
-            self.a.set_combination(ck, &self.k, cb, &self.b, &self.zero_diag);
+            shift = next;
+            self.a.add_to_diagonal(&self.diag_scratch);
             self.delta.fill(Vec3::zeros());
             let retry = self
                 .pcg
@@ -296,7 +301,6 @@ impl ImplicitEuler {
                 iterations: solve.iterations + retry.iterations,
                 ..retry
             };
-            shift *= 4.0;
         }
         if first {
             self.warm.copy_from_slice(&self.delta);
@@ -349,27 +353,13 @@ impl ImplicitEuler {
         rhs: &[Vec3],
         out: &mut [Vec3],
     ) -> SolveStats {
-        self.k.clear();
-        self.b.clear();
-        forces.add_jacobians(x, v, &mut self.k, &mut self.b);
-        self.zero_diag.fill(0.0);
-        self.a
-            .set_combination(-1.0, &self.k, 0.0, &self.b, &self.zero_diag);
+        self.a.clear();
+        forces.add_scaled_jacobians(x, v, -1.0, 0.0, &mut self.a, &mut self.scratch);
         let pcg = PcgParams {
             tol: params.stiffness_tol,
             ..params.pcg()
         };
         self.pcg.solve(&self.a, rhs, out, fixed, &pcg)
-    }
-
-    /// The last assembled `K = ∂F/∂x` (N/m), for diagnostics and tests.
-    pub fn stiffness(&self) -> &BlockSparse {
-        &self.k
-    }
-
-    /// The last assembled `B = ∂F/∂v` (N·s/m), for diagnostics and tests.
-    pub fn damping(&self) -> &BlockSparse {
-        &self.b
     }
 
     /// The last assembled system matrix (`M − λhB − λ²h²K` or `−K`).

@@ -33,7 +33,7 @@ pub type Vec3 = nalgebra::Vector3<f64>;
 
 pub use block_sparse::{BlockSparse, PatternError};
 pub use config::{ConfigError, IntegratorParams, ModelConfig, ThighGeometry, TissueParams};
-pub use force_model::{ForceModel, NoExtraForce, SumForce};
+pub use force_model::{ForceModel, JacobianScratch, NoExtraForce, SumForce};
 pub use integrator::{Dynamics, ImplicitEuler, StepStats};
 pub use mesh::{Edge, EdgeKind, SurfaceMesh};
 pub use pcg::{Pcg, PcgParams, Preconditioner, SolveStats};

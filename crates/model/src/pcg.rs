@@ -183,11 +183,16 @@ impl Pcg {
                 Preconditioner::BlockJacobi if fixed[i] => Matrix3::zeros(),
                 Preconditioner::BlockJacobi => {
                     let d = a.values()[a.diagonal_index(i)];
-                    let sym = (d + d.transpose()) * 0.5;
-                    match sym.cholesky() {
-                        Some(c) => c.inverse(),
-                        // Not SPD: fall back to scalar Jacobi on |diagonal|.
-                        None => Matrix3::from_diagonal(&sym.diagonal().map(|v| {
+                    // Closed-form inverse of the (symmetrized) 3×3 block if it
+                    // is positive definite (Sylvester's criterion), else scalar
+                    // Jacobi on |diagonal|.
+                    let m = (d + d.transpose()) * 0.5;
+                    let spd = m[(0, 0)] > 0.0
+                        && m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)] > 0.0
+                        && m.determinant() > 0.0;
+                    match m.try_inverse() {
+                        Some(inv) if spd => inv,
+                        _ => Matrix3::from_diagonal(&d.diagonal().map(|v| {
                             if v.abs() > 0.0 {
                                 1.0 / v.abs()
                             } else {

@@ -11,7 +11,7 @@
 
 use crate::block_sparse::BlockSparse;
 use crate::config::TissueParams;
-use crate::force_model::ForceModel;
+use crate::force_model::{ForceModel, JacobianScratch};
 use crate::mesh::{EdgeKind, SurfaceMesh};
 use crate::springs::{
     damper_force, damper_jacobian, linear_force, normal_energy, normal_force, normal_stiffness,
@@ -208,8 +208,14 @@ fn path_fraction(p: &Vec3, d: &Vec3, l_min: f64) -> f64 {
 impl ForceModel for TissueForces {
     fn add_forces(&mut self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
         for s in &self.springs {
-            let fi = spring_force(&x[s.i], &x[s.j], s.rest, |e| linear_force(s.a, e))
-                + damper_force(&x[s.i], &x[s.j], &v[s.i], &v[s.j], s.c);
+            // f_i = (a e + c ė) d: spring and damper along the same direction.
+            let delta = x[s.j] - x[s.i];
+            let l = delta.norm();
+            if l <= f64::MIN_POSITIVE {
+                continue;
+            }
+            let rate = (v[s.j] - v[s.i]).dot(&delta) / l;
+            let fi = delta * ((linear_force(s.a, l - s.rest) + s.c * rate) / l);
             f[s.i] += fi;
             f[s.j] -= fi;
         }
@@ -220,6 +226,45 @@ impl ForceModel for TissueForces {
                 + damper_force(&x[k], &s.anchor, &v[k], &zero, s.c)
                 - s.tangential_k * (x[k] - s.rest_position)
                 - s.tangential_c * v[k];
+        }
+    }
+
+    /// Direct assembly: one block `α S + β c d dᵀ` per spring into `a`.
+    fn add_scaled_jacobians(
+        &mut self,
+        x: &[Vec3],
+        _v: &[Vec3],
+        alpha: f64,
+        beta: f64,
+        a: &mut BlockSparse,
+        _scratch: &mut JacobianScratch,
+    ) {
+        let geo = self.geometric_in_compression;
+        for s in &self.springs {
+            let delta = x[s.j] - x[s.i];
+            let l = delta.norm();
+            if l <= f64::MIN_POSITIVE {
+                continue;
+            }
+            let d = delta / l;
+            let f = linear_force(s.a, l - s.rest);
+            let g = if f < 0.0 && !geo { 0.0 } else { f / l };
+            // α S + β D with S = (a − g) d dᵀ + g I and D = c d dᵀ.
+            let ddt = d * d.transpose();
+            let block =
+                ddt * (alpha * (s.a - g) + beta * s.c) + Matrix3::from_diagonal_element(alpha * g);
+            let [ii, ij, ji, jj] = s.blocks;
+            a.add_at(ii, &-block);
+            a.add_at(jj, &-block);
+            a.add_at(ij, &block);
+            a.add_at(ji, &block);
+        }
+        for s in &self.normals {
+            let law = |e| (normal_force(s.a, s.b, e), normal_stiffness(s.a, s.b, e));
+            let (_, stiff) = spring_force_jacobian(&x[s.node], &s.anchor, s.rest, law, geo);
+            let damp = damper_jacobian(&x[s.node], &s.anchor, s.c);
+            let block = (stiff + s.tangential_k) * alpha + (damp + s.tangential_c) * beta;
+            a.add_at(s.diag, &-block);
         }
     }
 

@@ -2,8 +2,9 @@
 //! Newton iterations per step and steps per second, for meshes of about 500,
 //! 1 000 (the default), 2 000, 8 000, 10 000 and 32 000 nodes, in three
 //! scenarios (free motion under gravity, a constant 10 N probe-patch load, a
-//! 0–15 N press at 1 Hz; see `echothigh_model::bench`). One run's numbers,
-//! wall-clock time on one thread: the machine may be shared, read them as such.
+//! 0–15 N press at 1 Hz; see `echothigh_model::bench`). One run's numbers on
+//! one thread, as wall-clock time and as the thread's CPU time (the per-core
+//! cost, which other processes on a shared machine do not inflate).
 
 use std::path::PathBuf;
 
@@ -37,8 +38,18 @@ pub fn run(args: Args) -> anyhow::Result<()> {
     }
     let mut cases = Vec::new();
     eprintln!(
-        "{:<6} {:>6}  {:>11} {:>11} {:>10} {:>9} {:>7} {:>7}",
-        "case", "nodes", "median µs", "p90 µs", "steps/s", "CG/step", "Newton", "limited"
+        "{:<6} {:>6}  {:>11} {:>11} {:>10}  {:>11} {:>11} {:>10} {:>9} {:>7} {:>7}",
+        "case",
+        "nodes",
+        "median µs",
+        "p90 µs",
+        "steps/s",
+        "CPU med µs",
+        "CPU p90 µs",
+        "CPU st/s",
+        "CG/step",
+        "Newton",
+        "limited"
     );
     for &(nt, nz, steps) in SIZES.iter().filter(|(nt, nz, _)| nt * nz <= args.max_nodes) {
         let steps = ((steps as f64 * args.steps_scale).round() as usize).max(1);
@@ -73,11 +84,14 @@ fn print_row(r: &CaseReport) {
         Scenario::Press => "press",
     };
     eprintln!(
-        "{name:<6} {:>6}  {:>11.1} {:>11.1} {:>10.1} {:>9.1} {:>7.2} {:>7}",
+        "{name:<6} {:>6}  {:>11.1} {:>11.1} {:>10.1}  {:>11.1} {:>11.1} {:>10.1} {:>9.1} {:>7.2} {:>7}",
         r.nodes,
         r.median_us,
         r.p90_us,
         r.steps_per_s,
+        r.cpu_median_us,
+        r.cpu_p90_us,
+        r.cpu_steps_per_s,
         r.cg_iterations_mean,
         r.newton_iterations_mean,
         r.limited_total
