@@ -4,7 +4,11 @@
 //! Residuals: `r_i = F_model(d_i) − F_data(d_i)` (N) at the data's depths,
 //! the model curve from the [`Indentation`] experiment interpolated
 //! linearly between its steps. Parameters are fitted by their logarithms,
-//! which keeps them positive and makes the finite-difference step relative.
+//! which keeps them positive and makes the finite-difference step relative;
+//! the normal springs' asymptote is fitted as the fraction
+//! `r = (normal_b/normal_a) / thigh.tissue_thickness ∈ (0, 1)` through its
+//! logit, so that the model's domain bound (asymptote shorter than the
+//! tissue) can be approached but never crossed by a trial point.
 
 use crate::calibration::data::IndentationCurve;
 use crate::calibration::indentation::Indentation;
@@ -25,6 +29,10 @@ pub enum FitParameter {
     StructuralStiffness,
     /// `tissue.tangential_stiffness`, N/m³ (shear of the layer).
     TangentialStiffness,
+    /// The normal springs' asymptote as a fraction of the tissue thickness,
+    /// `(normal_b/normal_a)/thigh.tissue_thickness` (sets `normal_a` from
+    /// `normal_b`; applied after the other parameters).
+    Asymptote,
 }
 
 impl FitParameter {
@@ -35,26 +43,65 @@ impl FitParameter {
             Self::NormalB => "tissue.normal_b",
             Self::StructuralStiffness => "tissue.structural_stiffness",
             Self::TangentialStiffness => "tissue.tangential_stiffness",
+            Self::Asymptote => "tissue.normal_b / tissue.normal_a / thigh.tissue_thickness",
         }
     }
 
-    /// The parameter's value in `t`.
+    /// The parameter's value in `m`.
+    pub fn value(&self, m: &ModelConfig) -> f64 {
+        match self {
+            Self::Asymptote => m.tissue.asymptote() / m.thigh.tissue_thickness,
+            p => p.get(&m.tissue),
+        }
+    }
+
+    /// Sets the parameter's value in `m`.
+    pub fn set_value(&self, m: &mut ModelConfig, v: f64) {
+        match self {
+            Self::Asymptote => {
+                m.tissue.normal_a = m.tissue.normal_b / (v * m.thigh.tissue_thickness)
+            }
+            p => p.set(&mut m.tissue, v),
+        }
+    }
+
+    /// The fitted coordinate of a value: `ln v`, or `logit v` for the
+    /// asymptote fraction.
+    fn coordinate_of(&self, v: f64) -> f64 {
+        match self {
+            Self::Asymptote => (v / (1.0 - v)).ln(),
+            _ => v.ln(),
+        }
+    }
+
+    /// The value of a fitted coordinate.
+    fn value_at(&self, c: f64) -> f64 {
+        match self {
+            Self::Asymptote => 1.0 / (1.0 + (-c).exp()),
+            _ => c.exp(),
+        }
+    }
+
+    /// The parameter's value in `t` (for the asymptote: `normal_b/normal_a`, m).
     pub fn get(&self, t: &TissueParams) -> f64 {
         match self {
             Self::NormalA => t.normal_a,
             Self::NormalB => t.normal_b,
             Self::StructuralStiffness => t.structural_stiffness,
             Self::TangentialStiffness => t.tangential_stiffness,
+            Self::Asymptote => t.normal_b / t.normal_a,
         }
     }
 
-    /// Sets the parameter's value in `t`.
+    /// Sets the parameter's value in `t` (for the asymptote, in m: sets
+    /// `normal_a`).
     pub fn set(&self, t: &mut TissueParams, v: f64) {
         match self {
             Self::NormalA => t.normal_a = v,
             Self::NormalB => t.normal_b = v,
             Self::StructuralStiffness => t.structural_stiffness = v,
             Self::TangentialStiffness => t.tangential_stiffness = v,
+            Self::Asymptote => t.normal_a = t.normal_b / v,
         }
     }
 }
@@ -70,7 +117,8 @@ pub struct Calibration {
     pub contact: ContactParams,
     /// The experiment (its `max_depth` is set to the data's last depth).
     pub experiment: Indentation,
-    /// Parameters to adjust (default: `normal_a`, `normal_b`).
+    /// Parameters to adjust (default: `normal_b`, the asymptote fraction,
+    /// `structural_stiffness`).
     pub parameters: Vec<FitParameter>,
     /// Fitter options.
     pub lm: LmOptions,
@@ -83,7 +131,11 @@ impl Default for Calibration {
             probe: Probe::default(),
             contact: ContactParams::default(),
             experiment: Indentation::default(),
-            parameters: vec![FitParameter::NormalA, FitParameter::NormalB],
+            parameters: vec![
+                FitParameter::NormalB,
+                FitParameter::Asymptote,
+                FitParameter::StructuralStiffness,
+            ],
             lm: LmOptions {
                 max_iterations: 30,
                 fd_step: 1e-4,
@@ -119,14 +171,12 @@ pub struct CalibrationReport {
 /// The model's force at the data's depths, N.
 fn model_forces(
     cal: &Calibration,
-    tissue: &TissueParams,
+    model: &ModelConfig,
     data: &IndentationCurve,
 ) -> Result<(IndentationCurve, Vec<f64>), CalibrationError> {
-    let mut model = cal.model.clone();
-    model.tissue = tissue.clone();
     let mut exp = cal.experiment;
     exp.max_depth = data.depth.last().copied().unwrap_or(0.0);
-    let curve = exp.run(&model, cal.probe, cal.contact)?;
+    let curve = exp.run(model, cal.probe, cal.contact)?;
     let f = data.depth.iter().map(|&d| curve.force_at(d)).collect();
     Ok((curve, f))
 }
@@ -139,26 +189,30 @@ pub fn calibrate(
     if cal.parameters.is_empty() {
         return Err(CalibrationError::Fit("no parameter to fit".into()));
     }
-    let start = &cal.model.tissue;
-    let theta0: Vec<f64> = cal.parameters.iter().map(|p| p.get(start).ln()).collect();
-    let tissue_at = |theta: &[f64]| {
-        let mut t = start.clone();
-        for (p, &v) in cal.parameters.iter().zip(theta) {
-            p.set(&mut t, v.exp());
+    // The asymptote fraction depends on normal_b: apply it last.
+    let mut order: Vec<usize> = (0..cal.parameters.len()).collect();
+    order.sort_by_key(|&i| cal.parameters[i] == FitParameter::Asymptote);
+    let theta0: Vec<f64> = cal
+        .parameters
+        .iter()
+        .map(|p| p.coordinate_of(p.value(&cal.model)))
+        .collect();
+    let model_at = |theta: &[f64]| {
+        let mut m = cal.model.clone();
+        for &i in &order {
+            let p = cal.parameters[i];
+            p.set_value(&mut m, p.value_at(theta[i]));
         }
-        t
+        m
     };
     let residual = |theta: &[f64], r: &mut [f64]| -> Result<(), CalibrationError> {
-        let t = tissue_at(theta);
-        let mut m = cal.model.clone();
-        m.tissue = t.clone();
-        // A trial point outside the valid parameter domain (e.g. an
-        // asymptote past the tissue thickness) is an uphill step.
+        let m = model_at(theta);
+        // A trial point outside the valid parameter domain is an uphill step.
         if m.validate("").is_err() {
             r.fill(f64::INFINITY);
             return Ok(());
         }
-        match model_forces(cal, &t, data) {
+        match model_forces(cal, &m, data) {
             Ok((_, f)) => {
                 for ((ri, fi), di) in r.iter_mut().zip(f).zip(&data.force) {
                     *ri = fi - di;
@@ -182,8 +236,8 @@ pub fn calibrate(
                 .unwrap_or_default()
         ))
     })?;
-    let tissue = tissue_at(&rep.params);
-    let (model_curve, f) = model_forces(cal, &tissue, data)?;
+    let model = model_at(&rep.params);
+    let (model_curve, f) = model_forces(cal, &model, data)?;
     let max_abs = f
         .iter()
         .zip(&data.force)
@@ -193,11 +247,11 @@ pub fn calibrate(
         fitted: cal
             .parameters
             .iter()
-            .map(|p| (*p, p.get(&tissue)))
+            .map(|p| (*p, p.value(&model)))
             .collect(),
         rms: rep.rms(),
         max_abs,
-        tissue,
+        tissue: model.tissue.clone(),
         model_curve,
         iterations: rep.iterations,
         evaluations: rep.evaluations,
