@@ -2,13 +2,7 @@
 //! the thigh with force feedback (d'Aulignac, Balaniuk & Laugier). The binary
 //! is thin: each subcommand parses its arguments and calls the library crates.
 
-mod bench;
-mod cmd;
-#[allow(dead_code)] // used by the runtime and the viewer as they land
-mod live;
-#[allow(dead_code)] // used by the commands that write plots as they land
-mod plot;
-mod view;
+use echothigh::{bench, cmd, view};
 
 use clap::{Parser, Subcommand};
 
@@ -25,6 +19,12 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Run a scripted compression exam (simulated hand and device) and write a run directory.
+    Run(cmd::run::Args),
+    /// The physics side as a UDP server (two-process deployment).
+    PhysicsServer(cmd::net::ServerArgs),
+    /// The haptic side as a UDP client of a physics server (two-process deployment).
+    HapticClient(cmd::net::ClientArgs),
     /// Benchmarks that write JSON reports (medians and percentiles of one run).
     #[command(subcommand)]
     Bench(bench::BenchCommand),
@@ -32,6 +32,9 @@ enum Command {
     Calibrate(cmd::calibrate::Args),
     /// Render B-mode echographic frames under the probe.
     Image(cmd::image::Args),
+    /// Experiments: the paper's Fig. 4 and the rate, latency and damping sweeps.
+    #[command(subcommand)]
+    Experiment(echothigh::experiment::ExperimentCommand),
     /// The trainee's live web viewer (3D thigh, probe, image, force, exam mode).
     View(view::Args),
 }
@@ -45,9 +48,13 @@ fn main() -> std::process::ExitCode {
         .with_writer(std::io::stderr)
         .init();
     let result = match cli.command {
+        Command::Run(a) => cmd::run::run(a),
+        Command::PhysicsServer(a) => cmd::net::server(a),
+        Command::HapticClient(a) => cmd::net::client(a),
         Command::Bench(b) => bench::run(b),
         Command::Calibrate(a) => cmd::calibrate::run(a),
         Command::Image(a) => cmd::image::run(a),
+        Command::Experiment(c) => echothigh::experiment::run(c),
         Command::View(a) => view::run(a),
     };
     match result {

@@ -2,6 +2,7 @@
 
 pub mod haptics;
 pub mod image;
+pub mod link;
 pub mod physics;
 
 use clap::Subcommand;
@@ -15,6 +16,8 @@ pub enum BenchCommand {
     Haptics(haptics::Args),
     /// Echographic frame rate.
     Image(image::Args),
+    /// Physics–haptics link: round-trip latency, achieved rates per deployment.
+    Link(link::Args),
 }
 
 /// Runs the chosen benchmark.
@@ -23,5 +26,6 @@ pub fn run(cmd: BenchCommand) -> anyhow::Result<()> {
         BenchCommand::Physics(a) => physics::run(a),
         BenchCommand::Haptics(a) => haptics::run(a),
         BenchCommand::Image(a) => image::run(a),
+        BenchCommand::Link(a) => link::run(a),
     }
 }

@@ -2,3 +2,5 @@
 
 pub mod calibrate;
 pub mod image;
+pub mod net;
+pub mod run;

@@ -1,0 +1,217 @@
+//! The two-process deployment of the paper's Fig. 1 (physics on one host,
+//! haptics on the host with the device): `echothigh physics-server` and
+//! `echothigh haptic-client`, over UDP with a session token.
+
+use super::run::{default_out, load_scenario, write_run, ModeArg};
+use crate::live::CouplingMode;
+use crate::runtime::client::{run_client, ClientEnd, LoopParts};
+use crate::runtime::deploy::{scripted_device, summarize, RunOutput};
+use crate::runtime::haptic_side::haptic_side;
+use crate::runtime::physics_loop::{physics_loop, Clock, PhysicsEnd};
+use crate::runtime::physics_side::PhysicsSide;
+use crate::runtime::trace::write_physics;
+use anyhow::{bail, Context, Result};
+use echothigh_transport::{connect, ListenConfig, SessionToken, TokenSource, UdpServer};
+use std::io::Write;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::atomic::AtomicBool;
+use std::time::Duration;
+
+/// Arguments of `echothigh physics-server`.
+#[derive(clap::Args, Debug)]
+#[command(after_help = "Examples:\n  echothigh physics-server\n  \
+echothigh physics-server --listen 127.0.0.1:7878 --token 00000000000000aa\n  \
+echothigh physics-server --listen 0.0.0.0:7878 --allow-remote")]
+pub struct ServerArgs {
+    /// Address to listen on (UDP). Loopback unless `--allow-remote`.
+    #[arg(long, default_value = "127.0.0.1:7878")]
+    pub listen: SocketAddr,
+    /// Accept a non-loopback listen address.
+    #[arg(long)]
+    pub allow_remote: bool,
+    /// Session token (16 hex digits); else $ECHOTHIGH_TOKEN; else generated and printed.
+    #[arg(long)]
+    pub token: Option<String>,
+    /// Scenario TOML (default: the built-in one).
+    #[arg(long)]
+    pub scenario: Option<PathBuf>,
+    /// How long to wait for the client (s).
+    #[arg(long, default_value_t = 60.0)]
+    pub accept_timeout: f64,
+    /// Silence of the client after which the server stops (s).
+    #[arg(long, default_value_t = 2.0)]
+    pub peer_timeout: f64,
+    /// Write the physics trace here (CSV).
+    #[arg(long)]
+    pub trace: Option<PathBuf>,
+}
+
+/// Arguments of `echothigh haptic-client`.
+#[derive(clap::Args, Debug)]
+#[command(
+    after_help = "Examples:\n  echothigh haptic-client --connect 127.0.0.1:7878 --token 00000000000000aa\n  \
+ECHOTHIGH_TOKEN=00000000000000aa echothigh haptic-client --connect 127.0.0.1:7878 --mode hold"
+)]
+pub struct ClientArgs {
+    /// Physics server address.
+    #[arg(long)]
+    pub connect: SocketAddr,
+    /// Session token (16 hex digits); else $ECHOTHIGH_TOKEN.
+    #[arg(long)]
+    pub token: Option<String>,
+    /// Scenario TOML (default: the built-in one); its `[coupling]`, `[link]`,
+    /// `[haptics]`, `[device]`, `[hand]`, `[exam]` and `[run]` apply here.
+    #[arg(long)]
+    pub scenario: Option<PathBuf>,
+    /// Override the coupling mode (`buffer` or `hold`; `direct` needs the physics in-process).
+    #[arg(long, value_enum)]
+    pub mode: Option<ModeArg>,
+    /// Override the run duration (s).
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Output directory (default: runs/client-<unix time>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Handshake timeout (s).
+    #[arg(long, default_value_t = 5.0)]
+    pub connect_timeout: f64,
+}
+
+/// Runs the physics server until its client leaves or goes silent.
+pub fn server(args: ServerArgs) -> Result<()> {
+    let scenario = load_scenario(args.scenario.as_deref(), None, None)?;
+    let (token, source) = SessionToken::resolve_or_generate(args.token.as_deref())?;
+    let listener = UdpServer::bind(&ListenConfig {
+        addr: args.listen,
+        allow_remote: args.allow_remote,
+    })?;
+    let addr = listener.local_addr()?;
+    let mut physics = PhysicsSide::new(&scenario)?;
+    // stdout may be a pipe its reader has closed: never panic on it.
+    let mut out = std::io::stdout();
+    let _ = writeln!(out, "physics server listening on {addr}");
+    if source == TokenSource::Generated {
+        let _ = writeln!(
+            out,
+            "session token: {token}   (give it to the client: --token {token})"
+        );
+    }
+    let _ = out.flush();
+    let clock = Clock::start();
+    let rate = scenario.coupling.physics_rate;
+    let mut link = listener
+        .accept(
+            token.0,
+            scenario
+                .link
+                .clone()
+                .with_seed(scenario.run.seed.wrapping_mul(2).wrapping_add(2)),
+            rate,
+            Duration::from_secs_f64(args.accept_timeout),
+            clock.now(),
+        )
+        .context("waiting for the haptic client")?;
+    tracing::info!("haptic client connected");
+    let mut records = Vec::with_capacity(((3600.0 * rate) as usize).min(1 << 20));
+    let stop = AtomicBool::new(false);
+    let report = physics_loop(
+        &mut physics,
+        &mut link,
+        clock,
+        &stop,
+        rate,
+        args.peer_timeout,
+        &mut records,
+    )?;
+    if let Some(p) = &args.trace {
+        write_physics(p, &records)?;
+    }
+    let _ = writeln!(
+        std::io::stdout(),
+        "physics server: {} steps at {:.1} Hz",
+        report.steps,
+        report.rate
+    );
+    match report.end {
+        PhysicsEnd::PeerClosed | PhysicsEnd::Stopped => Ok(()),
+        PhysicsEnd::PeerSilent => bail!(
+            "the haptic client went silent for more than {} s",
+            args.peer_timeout
+        ),
+    }
+}
+
+/// Runs the haptic client for the scenario's exam.
+pub fn client(args: ClientArgs) -> Result<()> {
+    let scenario = load_scenario(args.scenario.as_deref(), args.mode, args.duration)?;
+    let c = &scenario.coupling;
+    if c.mode == CouplingMode::Direct {
+        bail!("coupling.mode = direct needs the physics in-process: use `echothigh run --mode direct`");
+    }
+    let Some((token, _)) = SessionToken::from_arg_or_env(args.token.as_deref())? else {
+        bail!("no session token: pass --token (printed by the server) or set ECHOTHIGH_TOKEN");
+    };
+    let clock = Clock::start();
+    let (link, welcome) = connect(
+        args.connect,
+        token.0,
+        scenario
+            .link
+            .clone()
+            .with_seed(scenario.run.seed.wrapping_mul(2).wrapping_add(1)),
+        Duration::from_secs_f64(args.connect_timeout),
+        clock.now(),
+    )
+    .with_context(|| format!("connecting to the physics server at {}", args.connect))?;
+    tracing::info!(
+        "connected to {}, physics at {} Hz",
+        args.connect,
+        welcome.physics_rate
+    );
+    let device = scripted_device(&scenario)?;
+    let (sink, source) = haptic_side(c.mode, &scenario.haptics).map_err(anyhow::Error::msg)?;
+    let parts = LoopParts {
+        device,
+        source,
+        scale: scenario.device.force_scale(),
+        direct_physics: None,
+    };
+    let report = run_client(
+        Some(Box::new(link)),
+        sink,
+        parts,
+        &scenario.haptics.runner,
+        scenario.run.duration,
+        c.peer_timeout,
+    )?;
+    let summary = summarize(
+        &scenario,
+        "processes",
+        &report.ticks,
+        &[],
+        report.timing.missed_deadlines,
+        scenario.run.duration,
+        welcome.physics_rate,
+        report.faults,
+        report.link.duplicate + report.link.stale + report.link.malformed,
+        0,
+    );
+    let out = RunOutput {
+        ticks: report.ticks,
+        steps: Vec::new(),
+        summary,
+        peer_lost: report.end == ClientEnd::PeerLost,
+    };
+    let dir = args.out.clone().unwrap_or_else(|| default_out("client"));
+    write_run(&dir, &scenario, &out)?;
+    println!("haptic client: run written to {}", dir.display());
+    if let Some(t) = report.lost_at {
+        bail!(
+            "the physics server at {} went silent at t = {t:.3} s: force faded to zero, client stopped (data written to {})",
+            args.connect,
+            dir.display()
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,121 @@
+//! The physics side of Fig. 1: the thigh model (Eq. 1) with the probe's
+//! penalty contact (Eq. 2) and the haptic queries (distance, gradient, local
+//! stiffness), behind one `step` that turns a probe message into a sample
+//! message.
+
+use super::trace::PhysicsRecord;
+use crate::scenario::Scenario;
+use anyhow::Result;
+use echothigh_contact::{HapticSample, ProbeContact, SurfaceDistance, SurfaceGrid};
+use echothigh_model::ThighModel;
+use echothigh_transport::{ProbeMsg, SampleMsg};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
+
+/// The physical model and the probe contact.
+pub struct PhysicsSide {
+    model: ThighModel,
+    contact: ProbeContact,
+    last: Option<HapticSample>,
+    distance: SurfaceDistance,
+    grid: SurfaceGrid,
+}
+
+/// The probe pose carried by a probe message (position m, unit quaternion);
+/// a degenerate quaternion falls back to the identity (the exam pose).
+pub fn probe_pose(msg: &ProbeMsg) -> Isometry3<f64> {
+    let [w, i, j, k] = msg.orientation;
+    let q = Quaternion::new(w, i, j, k);
+    let rot = if q.norm() > 1e-9 && q.coords.iter().all(|c| c.is_finite()) {
+        UnitQuaternion::from_quaternion(q)
+    } else {
+        UnitQuaternion::identity()
+    };
+    Isometry3::from_parts(Translation3::from(Vector3::from(msg.position)), rot)
+}
+
+impl PhysicsSide {
+    /// Builds the model at rest and the contact for `scenario`.
+    pub fn new(scenario: &Scenario) -> Result<Self> {
+        let model = ThighModel::new(&scenario.model_config()).map_err(anyhow::Error::msg)?;
+        let contact = ProbeContact::new(&model, scenario.probe, scenario.contact)
+            .map_err(anyhow::Error::msg)?;
+        let mesh = model.mesh();
+        let distance =
+            SurfaceDistance::new(mesh.rest_positions(), mesh.rest_normals(), mesh.triangles());
+        let spacing = std::f64::consts::TAU
+            * scenario.thigh.semi_axis_x.max(scenario.thigh.semi_axis_y)
+            / scenario.thigh.n_theta as f64;
+        let grid = SurfaceGrid::new(model.node_count(), spacing.max(1e-3));
+        Ok(Self {
+            model,
+            contact,
+            last: None,
+            distance,
+            grid,
+        })
+    }
+
+    /// One physics step of `h` (s) at physics time `t` (s) with the probe
+    /// where `probe` says: implicit Euler with contact, then the queries.
+    pub fn step(&mut self, probe: &ProbeMsg, h: f64, t: f64) -> (SampleMsg, PhysicsRecord) {
+        let pose = probe_pose(probe);
+        let step = self.contact.step(&mut self.model, &pose, h);
+        let s = step.sample;
+        self.last = Some(s);
+        let mut msg = SampleMsg::default();
+        msg.t_sample = t + h;
+        msg.p = s.p.into();
+        msg.distance = s.distance;
+        msg.gradient = s.gradient.into();
+        msg.stiffness = s.stiffness;
+        msg.force = s.force.into();
+        msg.in_contact = u32::from(s.in_contact);
+        msg.newton_iterations = step.physics.newton_iterations;
+        msg.cg_iterations = step.physics.cg_iterations;
+        msg.limited = step.physics.limited;
+        msg.physics_rate = 1.0 / h;
+        let rec = PhysicsRecord {
+            t,
+            probe: s.p.into(),
+            distance: s.distance,
+            gradient: s.gradient.into(),
+            stiffness: s.stiffness,
+            force: s.force.into(),
+            newton_iterations: step.physics.newton_iterations,
+            cg_iterations: step.physics.cg_iterations,
+            limited: step.physics.limited,
+            compute_time: 0.0,
+        };
+        (msg, rec)
+    }
+
+    /// The thigh model (deformed state).
+    pub fn model(&self) -> &ThighModel {
+        &self.model
+    }
+
+    /// The probe contact.
+    pub fn contact(&self) -> &ProbeContact {
+        &self.contact
+    }
+
+    /// The last sample computed.
+    pub fn last_sample(&self) -> Option<HapticSample> {
+        self.last
+    }
+
+    /// Signed distance (m, > 0 outside) from `x` to the deformed surface.
+    pub fn signed_distance(&mut self, x: &Vector3<f64>) -> Option<f64> {
+        self.grid.rebuild(self.model.positions());
+        self.distance
+            .query(&self.grid, self.model.positions(), x)
+            .map(|s| s.distance)
+    }
+
+    /// Back to rest.
+    pub fn reset(&mut self) {
+        self.model.reset();
+        self.contact.reset();
+        self.last = None;
+    }
+}

@@ -1,0 +1,138 @@
+//! The bridge from the physical model to the echographic image (`DESIGN.md`
+//! §5): the skin's inward displacement along the image section under the
+//! probe, read off the deformed mesh, and the probe pressure.
+//!
+//! For each lateral position `u` along the probe's width, a ray is cast from
+//! above the face along the contact direction `k̂`; the skin displacement is
+//! the distance between where it meets the deformed surface and where it
+//! meets the rest surface (positive inward). The imaging crate carries it
+//! into depth towards the femur, as the normal springs do.
+
+use echothigh_imaging::SectionDeformation;
+use echothigh_model::{ThighModel, Vec3};
+use nalgebra::Isometry3;
+
+/// Distance from `o` along unit `d` to triangle `(a, b, c)` (Möller–Trumbore),
+/// if the ray hits it.
+fn ray_triangle(o: &Vec3, d: &Vec3, a: &Vec3, b: &Vec3, c: &Vec3) -> Option<f64> {
+    let e1 = b - a;
+    let e2 = c - a;
+    let pv = d.cross(&e2);
+    let det = e1.dot(&pv);
+    if det.abs() < 1e-18 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let tv = o - a;
+    let u = tv.dot(&pv) * inv;
+    if !(-1e-9..=1.0 + 1e-9).contains(&u) {
+        return None;
+    }
+    let qv = tv.cross(&e1);
+    let v = d.dot(&qv) * inv;
+    if v < -1e-9 || u + v > 1.0 + 1e-9 {
+        return None;
+    }
+    let t = e2.dot(&qv) * inv;
+    (t >= 0.0).then_some(t)
+}
+
+/// First hit of the ray `o + t d` (t ≥ 0) with the surface at positions `x`,
+/// considering only the triangles listed in `near`.
+fn first_hit(x: &[Vec3], tris: &[[usize; 3]], near: &[usize], o: &Vec3, d: &Vec3) -> Option<f64> {
+    let mut best: Option<f64> = None;
+    for &t in near {
+        let [a, b, c] = tris[t];
+        if let Some(s) = ray_triangle(o, d, &x[a], &x[b], &x[c]) {
+            best = Some(best.map_or(s, |b: f64| b.min(s)));
+        }
+    }
+    best
+}
+
+/// Reusable scratch for [`section_deformation`].
+#[derive(Debug, Clone, Default)]
+pub struct SectionScratch {
+    near: Vec<usize>,
+}
+
+/// Fills `out` with the skin displacement (m, inward) at `samples` lateral
+/// positions spread over `width` (m) centred on the probe at `pose`, from the
+/// model's deformed and rest surfaces. `bone_depth` (m) is copied into
+/// `out`. Allocation-free once `out` and `scratch` have grown.
+pub fn section_deformation(
+    model: &ThighModel,
+    pose: &Isometry3<f64>,
+    width: f64,
+    samples: usize,
+    bone_depth: f64,
+    scratch: &mut SectionScratch,
+    out: &mut SectionDeformation,
+) {
+    let mesh = model.mesh();
+    let tris = mesh.triangles();
+    let (x, rest) = (model.positions(), mesh.rest_positions());
+    let lateral = pose.rotation * Vec3::x();
+    let elevation = pose.rotation * Vec3::z();
+    let k = pose.rotation * -Vec3::y();
+    let p = pose.translation.vector;
+    let lift = 0.05;
+    // Triangles that the section's rays can meet: near the section plane and
+    // within the section's lateral span, on either surface.
+    scratch.near.clear();
+    let half = 0.5 * width + 0.01;
+    for (t, tri) in tris.iter().enumerate() {
+        let near = |pos: &[Vec3]| {
+            let (mut emin, mut emax, mut lmin, mut lmax) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+            for &i in tri {
+                let r = pos[i] - p;
+                let (e, l) = (r.dot(&elevation), r.dot(&lateral));
+                emin = emin.min(e);
+                emax = emax.max(e);
+                lmin = lmin.min(l);
+                lmax = lmax.max(l);
+            }
+            emin <= 1e-9 && emax >= -1e-9 && lmax >= -half && lmin <= half
+        };
+        if near(x) || near(rest) {
+            scratch.near.push(t);
+        }
+    }
+    let n = samples.max(2);
+    out.lateral.clear();
+    out.surface_displacement.clear();
+    out.bone_depth = bone_depth;
+    for j in 0..n {
+        let u = -0.5 * width + width * j as f64 / (n - 1) as f64;
+        let o = p + lateral * u - k * lift;
+        let s = match (
+            first_hit(rest, tris, &scratch.near, &o, &k),
+            first_hit(x, tris, &scratch.near, &o, &k),
+        ) {
+            (Some(r), Some(d)) => (d - r).max(0.0),
+            _ => 0.0,
+        };
+        out.lateral.push(u);
+        out.surface_displacement.push(s);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A ray straight down onto a horizontal triangle meets it at the height
+    /// difference; a ray beside it misses.
+    #[test]
+    fn ray_meets_triangle_at_its_height() {
+        let (a, b, c) = (
+            Vec3::new(-1.0, 0.0, -1.0),
+            Vec3::new(1.0, 0.0, -1.0),
+            Vec3::new(0.0, 0.0, 1.0),
+        );
+        let d = -Vec3::y();
+        let t = ray_triangle(&Vec3::new(0.1, 2.5, 0.0), &d, &a, &b, &c).unwrap();
+        assert!((t - 2.5).abs() < 1e-12);
+        assert!(ray_triangle(&Vec3::new(5.0, 2.5, 0.0), &d, &a, &b, &c).is_none());
+    }
+}
