@@ -154,6 +154,7 @@ try {
   check('dragging the probe raises the force', true,
     `|F| ${before.physics.toFixed(2)} → ${pressed.physics.toFixed(2)} N (rendered ${pressed.rendered.toFixed(2)} N) at depth ${(pressed.depth * 1000).toFixed(1)} mm`);
   await page.waitForTimeout(1500); // let the plot and the image fill in
+  await page.evaluate(() => { document.querySelector('aside').scrollTop = 0; });
   await page.screenshot({ path: join(shots, '02-pressing.png') });
   await page.mouse.up();
 

@@ -11,7 +11,7 @@ const FRAME_SURFACE = 2;
 const DEPTH_STEP = 0.0005; // m per wheel notch or key press
 const MAX_DEPTH = 0.035; // m, below the server's limit
 const TILT_STEP = 0.05; // rad
-const MAX_TILT = 0.7; // rad
+const MAX_TILT = 0.6; // rad, the runtime's limit
 
 const $ = (id) => document.getElementById(id);
 

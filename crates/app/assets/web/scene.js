@@ -11,9 +11,12 @@ const FULL = new THREE.Color(0xc0262b);
 const ARROW_M_PER_N = 0.004;
 const ARROW_MAX = 0.12;
 
-/** Colour of a node whose normal spring is compressed by `c` (fraction of its asymptote). */
+/**
+ * Colour of a node whose normal spring is compressed by `c` (fraction of its
+ * asymptote b/a): a square-root scale, so that the first millimetres show.
+ */
 function compressionColour(c, out) {
-  const t = Math.min(Math.max(c, 0), 1);
+  const t = Math.sqrt(Math.min(Math.max(c, 0), 1));
   if (t < 0.5) out.copy(REST).lerp(MID, t * 2);
   else out.copy(MID).lerp(FULL, (t - 0.5) * 2);
   return out;

@@ -11,16 +11,18 @@ mod assets;
 mod exam;
 #[cfg(test)]
 mod fake;
-mod protocol;
+pub mod protocol;
 mod server;
 #[cfg(test)]
 mod tests;
 
 use crate::live::LiveControl;
+use crate::runtime::live_system::LiveSystem;
+use crate::scenario::Scenario;
 use anyhow::{bail, Context, Result};
 use std::io::Write;
 use std::net::{IpAddr, Ipv4Addr, SocketAddr};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 pub use server::ServerConfig;
@@ -66,26 +68,25 @@ pub fn url(addr: SocketAddr) -> String {
     format!("http://{addr}/")
 }
 
-/// Runs the viewer until Ctrl-C.
+/// Runs the viewer until Ctrl-C: starts the live system (`runtime::live_system`)
+/// from the scenario, serves it, and stops its threads on the way out.
 pub fn run(args: Args) -> Result<()> {
     check_bind(args.bind, args.allow_remote)?;
     check_rate(args.rate)?;
-    let control = start_runtime(args.scenario.as_deref())?;
+    let scenario = Scenario::load(args.scenario.as_deref())?;
+    let system = LiveSystem::start(scenario).context("starting the live simulation")?;
+    let control: Arc<dyn LiveControl> = system.clone();
     let config = ServerConfig {
         state_rate: args.rate,
     };
     let addr = SocketAddr::new(args.bind, args.port);
-    tokio::runtime::Builder::new_current_thread()
+    let served = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
-        .context("starting the web server's async runtime")?
-        .block_on(serve(control, addr, config, shutdown_signal()))
-}
-
-/// Starts the live simulation from the scenario file (or the defaults).
-fn start_runtime(scenario: Option<&Path>) -> Result<Arc<dyn LiveControl>> {
-    let _ = scenario;
-    bail!("PENDING-RUNTIME: the live runtime has not landed yet")
+        .context("starting the web server's async runtime")
+        .and_then(|rt| rt.block_on(serve(control, addr, config, shutdown_signal())));
+    system.shutdown();
+    served
 }
 
 /// Resolves on Ctrl-C (or if the signal cannot be installed, never).
