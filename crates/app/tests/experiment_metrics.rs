@@ -1,7 +1,8 @@
 //! The Fig. 4 measures on signals whose answers are known by hand.
 
 use echothigh::experiment::metrics::{
-    device_energy, errors, hold_losses, hold_oscillation, hold_segments, measure, tick_changes, ZERO_FORCE,
+    device_energy, errors, hold_losses, hold_oscillation, hold_segments, measure, tick_changes,
+    ZERO_FORCE,
 };
 use echothigh::experiment::trace::ModeTrace;
 use echothigh::live::CouplingMode;
@@ -51,8 +52,12 @@ fn errors_of_an_offset() {
 /// zero ticks); the second starts at zero (never touched: no loss).
 #[test]
 fn contact_losses_count_drops_after_contact_only() {
-    let f = vec![5.0, 5.0, 0.0, 0.0, 5.0, 0.0, 0.0, 0.0, 5.0, 9.0, 0.0, 0.0, 3.0];
-    let h = vec![true, true, true, true, true, true, true, true, true, false, true, true, true];
+    let f = vec![
+        5.0, 5.0, 0.0, 0.0, 5.0, 0.0, 0.0, 0.0, 5.0, 9.0, 0.0, 0.0, 3.0,
+    ];
+    let h = vec![
+        true, true, true, true, true, true, true, true, true, false, true, true, true,
+    ];
     assert_eq!(hold_segments(&h), vec![(0, 9), (10, 13)]);
     assert_eq!(hold_losses(&f, &h), (2, 5));
     // Just above the threshold is contact.
@@ -90,13 +95,17 @@ fn device_energy_sign_and_value() {
 #[test]
 fn measure_a_held_staircase() {
     let n = 2000;
-    let smooth: Vec<f64> = (0..n).map(|i| 5.0 + 4.0 * (std::f64::consts::PI * i as f64 / n as f64).sin()).collect();
+    let smooth: Vec<f64> = (0..n)
+        .map(|i| 5.0 + 4.0 * (std::f64::consts::PI * i as f64 / n as f64).sin())
+        .collect();
     let held: Vec<f64> = (0..n).map(|i| smooth[i - i % 10]).collect();
     let hold_flags = vec![false; n];
     let ms = measure(&trace(smooth.clone(), hold_flags.clone()), &smooth);
     let mh = measure(&trace(held, hold_flags), &smooth);
     assert_eq!(ms.rms_error, 0.0);
-    assert!(mh.rms_error > 0.0 && mh.peak_error <= 10.0 * 4.0 * std::f64::consts::PI / n as f64 + 1e-12);
+    assert!(
+        mh.rms_error > 0.0 && mh.peak_error <= 10.0 * 4.0 * std::f64::consts::PI / n as f64 + 1e-12
+    );
     assert!(mh.energy_above_30hz > 10.0 * ms.energy_above_30hz);
     assert!(mh.max_tick_change > 5.0 * ms.max_tick_change);
     assert!(!ms.trembles && !mh.trembles);

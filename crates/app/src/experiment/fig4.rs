@@ -18,7 +18,11 @@ use std::io::Write;
 use std::path::Path;
 
 /// The modes of the figure, in the order of the traces and the table.
-pub const MODES: [CouplingMode; 3] = [CouplingMode::Buffer, CouplingMode::Hold, CouplingMode::Direct];
+pub const MODES: [CouplingMode; 3] = [
+    CouplingMode::Buffer,
+    CouplingMode::Hold,
+    CouplingMode::Direct,
+];
 
 /// Plot colours: buffer blue, hold red, direct black (dashed).
 pub const COLORS: [(u8, u8, u8); 3] = [(31, 119, 180), (214, 39, 40), (20, 20, 20)];
@@ -69,7 +73,12 @@ impl Fig4Metrics {
 
 /// Measures the three traces (buffer, hold, direct) of `scenario`.
 pub fn measure_all(scenario: &Scenario, traces: &[ModeTrace]) -> Result<Fig4Metrics> {
-    let [b, h, d] = traces else { bail!("expected the buffer, hold and direct traces, got {}", traces.len()) };
+    let [b, h, d] = traces else {
+        bail!(
+            "expected the buffer, hold and direct traces, got {}",
+            traces.len()
+        )
+    };
     let reference = &d.force;
     Ok(Fig4Metrics {
         seed: scenario.run.seed,
@@ -134,8 +143,13 @@ pub fn table(m: &Fig4Metrics) -> String {
 /// press.
 pub fn press_window(trace: &ModeTrace) -> (f64, f64) {
     let whole = (0.0, trace.t.last().copied().unwrap_or(1.0));
-    let Some(start) = trace.phase.iter().position(|&p| p == 1) else { return whole };
-    let hold = trace.phase[start..].iter().position(|&p| p != 1).map_or(trace.t.len() - 1, |i| start + i);
+    let Some(start) = trace.phase.iter().position(|&p| p == 1) else {
+        return whole;
+    };
+    let hold = trace.phase[start..]
+        .iter()
+        .position(|&p| p != 1)
+        .map_or(trace.t.len() - 1, |i| start + i);
     let t0 = (trace.t[start] - 0.1).max(0.0);
     let t1 = (trace.t[hold] + 0.4).min(whole.1);
     (t0, t1)
@@ -146,13 +160,12 @@ fn series(traces: &[ModeTrace], window: Option<(f64, f64)>) -> Vec<Series> {
         .iter()
         .zip(COLORS)
         .map(|(tr, color)| {
-            let pts: Vec<(f64, f64)> = tr
-                .t
-                .iter()
-                .zip(&tr.force)
-                .filter(|(t, _)| window.is_none_or(|(a, b)| **t >= a && **t <= b))
-                .map(|(&t, &f)| (t, f))
-                .collect();
+            let pts: Vec<(f64, f64)> =
+                tr.t.iter()
+                    .zip(&tr.force)
+                    .filter(|(t, _)| window.is_none_or(|(a, b)| **t >= a && **t <= b))
+                    .map(|(&t, &f)| (t, f))
+                    .collect();
             let name = match tr.mode {
                 CouplingMode::Buffer => "with buffer model".to_string(),
                 CouplingMode::Hold => "without buffer model (force held)".to_string(),
@@ -197,7 +210,8 @@ pub fn figure(result: &Fig4Result) -> Figure {
 
 /// Writes `force.csv`: `t` (s) and the force magnitude of each mode (N).
 pub fn write_force_csv(path: &Path, traces: &[ModeTrace]) -> Result<()> {
-    let file = std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let file =
+        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
     let mut w = std::io::BufWriter::new(file);
     let names: Vec<&str> = traces.iter().map(|t| mode_name(t.mode)).collect();
     writeln!(w, "t,{},phase,holding", names.join(","))?;
@@ -211,7 +225,8 @@ pub fn write_force_csv(path: &Path, traces: &[ModeTrace]) -> Result<()> {
         let (phase, holding) = first.map_or((255, false), |t| (t.phase[k], t.holding[k]));
         writeln!(w, ",{phase},{}", u8::from(holding))?;
     }
-    w.flush().with_context(|| format!("writing {}", path.display()))?;
+    w.flush()
+        .with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }
 

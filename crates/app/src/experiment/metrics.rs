@@ -154,7 +154,11 @@ pub fn hold_oscillation(force: &[f64], holding: &[bool], settle_ticks: usize) ->
         if mean <= ZERO_FORCE {
             continue;
         }
-        let (lo, hi) = w.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &f| (lo.min(f), hi.max(f)));
+        let (lo, hi) = w
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &f| {
+                (lo.min(f), hi.max(f))
+            });
         worst = worst.max((hi - lo) / mean);
     }
     worst
@@ -168,7 +172,9 @@ pub fn device_energy(force: &[[f64; 3]], position: &[[f64; 3]], p_end: [f64; 3])
     (0..n)
         .map(|k| {
             let next = if k + 1 < n { position[k + 1] } else { p_end };
-            (0..3).map(|i| force[k][i] * (next[i] - position[k][i])).sum::<f64>()
+            (0..3)
+                .map(|i| force[k][i] * (next[i] - position[k][i]))
+                .sum::<f64>()
         })
         .sum()
 }
@@ -194,11 +200,23 @@ pub fn measure(trace: &ModeTrace, reference: &[f64]) -> ModeMetrics {
         hold_zero_ticks,
         hold_oscillation: hold_osc,
         energy_above_30hz: e_hf,
-        rms_above_30hz: if duration > 0.0 { (e_hf / duration).sqrt() } else { 0.0 },
+        rms_above_30hz: if duration > 0.0 {
+            (e_hf / duration).sqrt()
+        } else {
+            0.0
+        },
         rms_error,
         peak_error,
-        rms_error_rel: if ref_peak > 0.0 { rms_error / ref_peak } else { 0.0 },
-        device_energy: device_energy(&trace.device_force, &trace.device_position, trace.final_position),
+        rms_error_rel: if ref_peak > 0.0 {
+            rms_error / ref_peak
+        } else {
+            0.0
+        },
+        device_energy: device_energy(
+            &trace.device_force,
+            &trace.device_position,
+            trace.final_position,
+        ),
         trembles: hold_contact_losses > 0 || hold_osc >= TREMBLE_RATIO,
     }
 }

@@ -48,8 +48,10 @@ pub struct SweepArgs {
 
 /// `echothigh experiment ...`
 #[derive(clap::Subcommand, Debug, Clone)]
-#[command(after_help = "Examples:\n  echothigh experiment fig4 --out runs/fig4\n  \
-echothigh experiment sweep-rate --values 25,50,100,200,500\n  echothigh experiment sweep-damping --out runs/damping")]
+#[command(
+    after_help = "Examples:\n  echothigh experiment fig4 --out runs/fig4\n  \
+echothigh experiment sweep-rate --values 25,50,100,200,500\n  echothigh experiment sweep-damping --out runs/damping"
+)]
 pub enum ExperimentCommand {
     /// The paper's Fig. 4: buffer, hold and direct on the same exam, with metrics and plots.
     Fig4(CommonArgs),
@@ -62,7 +64,8 @@ pub enum ExperimentCommand {
 }
 
 fn out_dir(arg: &Option<PathBuf>, name: &str) -> PathBuf {
-    arg.clone().unwrap_or_else(|| crate::cmd::run::default_out(name))
+    arg.clone()
+        .unwrap_or_else(|| crate::cmd::run::default_out(name))
 }
 
 /// Runs the fig4 experiment on the scenario of `path` (or the embedded one)
@@ -75,7 +78,12 @@ pub fn run_fig4(path: Option<&Path>, dir: &Path) -> Result<String> {
 
 /// Runs a sweep and writes it into `dir` (for the damping sweep, also
 /// `stability.md`); returns a short report.
-pub fn run_sweep(kind: SweepKind, path: Option<&Path>, values: Option<&[f64]>, dir: &Path) -> Result<String> {
+pub fn run_sweep(
+    kind: SweepKind,
+    path: Option<&Path>,
+    values: Option<&[f64]>,
+    dir: &Path,
+) -> Result<String> {
     let s = scenario::load_fig4(path)?;
     let defaults = kind.default_values();
     let values = values.unwrap_or(&defaults);
@@ -98,8 +106,9 @@ pub fn run_sweep(kind: SweepKind, path: Option<&Path>, values: Option<&[f64]>, d
         if let Some(direct) = closest {
             let b = stability::bound(&s, direct);
             let md = stability::markdown(&b, &result.rows);
-            std::fs::write(dir.join("stability.md"), &md)
-                .map_err(|e| anyhow::anyhow!("writing {}: {e}", dir.join("stability.md").display()))?;
+            std::fs::write(dir.join("stability.md"), &md).map_err(|e| {
+                anyhow::anyhow!("writing {}: {e}", dir.join("stability.md").display())
+            })?;
             report.push_str(&md);
         }
     }
@@ -124,5 +133,10 @@ pub fn run(cmd: ExperimentCommand) -> Result<()> {
 
 fn sweep_cmd(kind: SweepKind, a: &SweepArgs) -> Result<String> {
     let dir = out_dir(&a.common.out, kind.name());
-    run_sweep(kind, a.common.scenario.as_deref(), a.values.as_deref(), &dir)
+    run_sweep(
+        kind,
+        a.common.scenario.as_deref(),
+        a.values.as_deref(),
+        &dir,
+    )
 }

@@ -20,11 +20,13 @@ use rustfft::FftPlanner;
 /// samples or a non-positive period.
 pub fn energy_above(x: &[f64], period: f64, cutoff: f64) -> f64 {
     let n = x.len();
-    if n < 2 || !(period > 0.0) {
+    if n < 2 || period.is_nan() || period <= 0.0 {
         return 0.0;
     }
     let mut buf: Vec<Complex<f64>> = x.iter().map(|&v| Complex::new(v, 0.0)).collect();
-    FftPlanner::<f64>::new().plan_fft_forward(n).process(&mut buf);
+    FftPlanner::<f64>::new()
+        .plan_fft_forward(n)
+        .process(&mut buf);
     let span = n as f64 * period;
     let sum: f64 = buf
         .iter()
@@ -67,7 +69,9 @@ mod tests {
     #[test]
     fn parseval_holds_for_an_arbitrary_signal() {
         let t = 1e-3;
-        let x: Vec<f64> = (0..1000).map(|i| ((i * 37 % 101) as f64).sqrt() - 3.0).collect();
+        let x: Vec<f64> = (0..1000)
+            .map(|i| ((i * 37 % 101) as f64).sqrt() - 3.0)
+            .collect();
         let mean = x.iter().sum::<f64>() / x.len() as f64;
         let dc = mean * mean * x.len() as f64 * t;
         let above = energy_above(&x, t, 0.5);

@@ -66,7 +66,11 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// The boundaries for `scenario`, with the local stiffness measured on its
 /// `direct` trace (one physics step per tick) during the holds in contact.
 pub fn bound(scenario: &Scenario, direct: &ModeTrace) -> StabilityBound {
-    let n = direct.step_stiffness.len().min(direct.holding.len()).min(direct.force.len());
+    let n = direct
+        .step_stiffness
+        .len()
+        .min(direct.holding.len())
+        .min(direct.force.len());
     let k = median(
         (0..n)
             .filter(|&i| direct.holding[i] && direct.force[i] > ZERO_FORCE)
@@ -98,7 +102,10 @@ pub fn bound(scenario: &Scenario, direct: &ModeTrace) -> StabilityBound {
 /// The observed boundary of `mode` in a damping sweep: the largest swept
 /// hand damping at which it trembles (`None` if it never does).
 pub fn largest_trembling(rows: &[SweepRow], mode: CouplingMode) -> Option<f64> {
-    rows.iter().filter(|r| r.mode == mode && r.metrics.trembles).map(|r| r.value).reduce(f64::max)
+    rows.iter()
+        .filter(|r| r.mode == mode && r.metrics.trembles)
+        .map(|r| r.value)
+        .reduce(f64::max)
 }
 
 /// The argument written next to the damping sweep's plot (markdown).
@@ -127,25 +134,51 @@ pub fn markdown(b: &StabilityBound, rows: &[SweepRow]) -> String {
         b.hold_critical_damping,
         b.hold_critical_hand_damping
     ));
+    let verdict = if b.buffer_critical_damping < b.device_damping {
+        "below the device's own friction: passive for any hand damping ≥ 0".to_string()
+    } else {
+        format!(
+            "above the device's own friction: a hand damping above {:.2} N·s/m is needed, and direct \
+             coupling (also rendered at 1 kHz) needs it as well. `K` exceeds what the device renders \
+             stably at 1 kHz; the cure is to clamp the rendered stiffness, not the coupling",
+            b.buffer_critical_damping - b.device_damping
+        )
+    };
     s.push_str(&format!(
         "- With the buffer model (`buffer`): the 1 kHz loop renders `K` from the local model without \
-         delay, `T` = {:.1} ms: `K T / 2` = {:.2} N·s/m, below the device's own friction: passive for \
-         any hand damping ≥ 0.\n\n",
+         delay, `T` = {:.1} ms: `K T / 2` = {:.2} N·s/m, {verdict}.\n\n",
         b.buffer_period * 1e3,
         b.buffer_critical_damping
     ));
-    s.push_str("| hand damping (N·s/m) | hold: losses | hold: p-p/mean | buffer: losses | buffer: p-p/mean |\n");
-    s.push_str("|---:|---:|---:|---:|---:|\n");
-    let values: Vec<f64> = rows.iter().filter(|r| r.mode == CouplingMode::Hold).map(|r| r.value).collect();
+    s.push_str(
+        "| hand damping (N·s/m) | hold: losses | hold: p-p/mean | buffer: losses | buffer: p-p/mean | \
+         direct: losses | direct: p-p/mean |\n",
+    );
+    s.push_str("|---:|---:|---:|---:|---:|---:|---:|\n");
+    let values: Vec<f64> = rows
+        .iter()
+        .filter(|r| r.mode == CouplingMode::Hold)
+        .map(|r| r.value)
+        .collect();
     for v in values {
-        let get = |m: CouplingMode| rows.iter().find(|r| r.mode == m && r.value == v).map(|r| r.metrics);
-        if let (Some(h), Some(bu)) = (get(CouplingMode::Hold), get(CouplingMode::Buffer)) {
+        let get = |m: CouplingMode| {
+            rows.iter()
+                .find(|r| r.mode == m && r.value == v)
+                .map(|r| r.metrics)
+        };
+        if let (Some(h), Some(bu), Some(d)) = (
+            get(CouplingMode::Hold),
+            get(CouplingMode::Buffer),
+            get(CouplingMode::Direct),
+        ) {
             s.push_str(&format!(
-                "| {v} | {} | {:.1} % | {} | {:.1} % |\n",
+                "| {v} | {} | {:.1} % | {} | {:.1} % | {} | {:.1} % |\n",
                 h.hold_contact_losses,
                 h.hold_oscillation * 100.0,
                 bu.hold_contact_losses,
-                bu.hold_oscillation * 100.0
+                bu.hold_oscillation * 100.0,
+                d.hold_contact_losses,
+                d.hold_oscillation * 100.0
             ));
         }
     }
@@ -154,9 +187,11 @@ pub fn markdown(b: &StabilityBound, rows: &[SweepRow]) -> String {
         None => "never trembles over the swept range".to_string(),
     };
     s.push_str(&format!(
-        "\nObserved: `hold` {}; `buffer` {}. Predicted boundary for `hold`: {:.2} N·s/m of hand damping.\n",
+        "\nObserved (trembling: a contact loss in a hold, or a hold peak-to-peak ≥ 20 % of its mean): \
+         `hold` {}; `buffer` {}; `direct` {}. Predicted boundary for `hold`: {:.2} N·s/m of hand damping.\n",
         observed(CouplingMode::Hold),
         observed(CouplingMode::Buffer),
+        observed(CouplingMode::Direct),
         b.hold_critical_hand_damping
     ));
     s

@@ -71,13 +71,13 @@ impl SweepKind {
         }
     }
 
-    /// The values: 25–500 Hz, 0–50 ms; damping across and beyond the
-    /// human range (2–10 N·s/m).
+    /// The values: 25–500 Hz, 0–50 ms; damping across the human range
+    /// (2–10 N·s/m) and beyond, past the boundary of `hold`.
     pub fn default_values(self) -> Vec<f64> {
         match self {
             SweepKind::Rate => vec![25.0, 50.0, 100.0, 200.0, 500.0],
             SweepKind::Latency => vec![0.0, 5.0, 20.0, 50.0],
-            SweepKind::Damping => vec![0.0, 1.0, 2.0, 4.0, 6.0, 8.0, 10.0, 15.0, 20.0],
+            SweepKind::Damping => vec![0.0, 2.0, 5.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 80.0],
         }
     }
 
@@ -118,7 +118,8 @@ pub fn sweep(base: &Scenario, kind: SweepKind, values: &[f64]) -> Result<Sweep> 
     for &v in values {
         let mut s = base.clone();
         kind.apply(&mut s, v);
-        s.validate().with_context(|| format!("{} at {v} {}", kind.name(), kind.unit()))?;
+        s.validate()
+            .with_context(|| format!("{} at {v} {}", kind.name(), kind.unit()))?;
         let first = jobs.len();
         jobs.push((s.clone(), CouplingMode::Buffer));
         jobs.push((s.clone(), CouplingMode::Hold));
@@ -139,7 +140,11 @@ pub fn sweep(base: &Scenario, kind: SweepKind, values: &[f64]) -> Result<Sweep> 
             (CouplingMode::Hold, &traces[first + 1]),
             (CouplingMode::Direct, &traces[direct]),
         ] {
-            rows.push(SweepRow { value, mode, metrics: measure(trace, reference) });
+            rows.push(SweepRow {
+                value,
+                mode,
+                metrics: measure(trace, reference),
+            });
         }
     }
     let mut directs = Vec::new();
@@ -154,7 +159,8 @@ pub fn sweep(base: &Scenario, kind: SweepKind, values: &[f64]) -> Result<Sweep> 
 
 /// Writes the rows as CSV.
 pub fn write_sweep_csv(path: &Path, kind: SweepKind, rows: &[SweepRow]) -> Result<()> {
-    let file = std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let file =
+        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
     let mut w = std::io::BufWriter::new(file);
     writeln!(
         w,
@@ -183,21 +189,50 @@ pub fn write_sweep_csv(path: &Path, kind: SweepKind, rows: &[SweepRow]) -> Resul
             u8::from(m.trembles)
         )?;
     }
-    w.flush().with_context(|| format!("writing {}", path.display()))?;
+    w.flush()
+        .with_context(|| format!("writing {}", path.display()))?;
     Ok(())
 }
 
-fn curve(rows: &[SweepRow], mode: CouplingMode, y: impl Fn(&ModeMetrics) -> f64) -> Vec<(f64, f64)> {
-    rows.iter().filter(|r| r.mode == mode).map(|r| (r.value, y(&r.metrics))).collect()
+fn curve(
+    rows: &[SweepRow],
+    mode: CouplingMode,
+    y: impl Fn(&ModeMetrics) -> f64,
+) -> Vec<(f64, f64)> {
+    rows.iter()
+        .filter(|r| r.mode == mode)
+        .map(|r| (r.value, y(&r.metrics)))
+        .collect()
 }
 
-fn panel(kind: SweepKind, rows: &[SweepRow], title: &str, y_label: &str, y: impl Fn(&ModeMetrics) -> f64 + Copy) -> Panel {
+fn panel(
+    kind: SweepKind,
+    rows: &[SweepRow],
+    title: &str,
+    y_label: &str,
+    y: impl Fn(&ModeMetrics) -> f64 + Copy,
+) -> Panel {
     let mut series = vec![
-        Series::line("with buffer model", curve(rows, CouplingMode::Buffer, y), super::fig4::COLORS[0]),
-        Series::line("without buffer model (held)", curve(rows, CouplingMode::Hold, y), super::fig4::COLORS[1]),
+        Series::line(
+            "with buffer model",
+            curve(rows, CouplingMode::Buffer, y),
+            super::fig4::COLORS[0],
+        ),
+        Series::line(
+            "without buffer model (held)",
+            curve(rows, CouplingMode::Hold, y),
+            super::fig4::COLORS[1],
+        ),
     ];
     if kind.changes_direct() {
-        series.push(Series::line("direct", curve(rows, CouplingMode::Direct, y), super::fig4::COLORS[2]).dashed());
+        series.push(
+            Series::line(
+                "direct",
+                curve(rows, CouplingMode::Direct, y),
+                super::fig4::COLORS[2],
+            )
+            .dashed(),
+        );
     }
     Panel {
         title: title.into(),
@@ -212,15 +247,27 @@ fn panel(kind: SweepKind, rows: &[SweepRow], title: &str, y_label: &str, y: impl
 /// holds, and the holds' relative peak-to-peak force.
 pub fn sweep_figure(kind: SweepKind, rows: &[SweepRow]) -> Figure {
     Figure::new(vec![
-        panel(kind, rows, "RMS error against direct coupling", "RMS error (% of peak force)", |m| {
-            m.rms_error_rel * 100.0
-        }),
-        panel(kind, rows, "Contact losses during the holds", "contact losses (count)", |m| {
-            f64::from(m.hold_contact_losses)
-        }),
-        panel(kind, rows, "Force oscillation during the holds", "peak-to-peak / mean (%)", |m| {
-            m.hold_oscillation * 100.0
-        }),
+        panel(
+            kind,
+            rows,
+            "RMS error against direct coupling",
+            "RMS error (% of peak force)",
+            |m| m.rms_error_rel * 100.0,
+        ),
+        panel(
+            kind,
+            rows,
+            "Contact losses during the holds",
+            "contact losses (count)",
+            |m| f64::from(m.hold_contact_losses),
+        ),
+        panel(
+            kind,
+            rows,
+            "Force oscillation during the holds",
+            "peak-to-peak / mean (%)",
+            |m| m.hold_oscillation * 100.0,
+        ),
     ])
 }
 

@@ -52,9 +52,12 @@ pub fn mode_name(mode: CouplingMode) -> &'static str {
 pub fn run_mode(scenario: &Scenario, mode: CouplingMode) -> Result<ModeTrace> {
     let mut s = scenario.clone();
     s.coupling.mode = mode;
-    s.validate().with_context(|| format!("scenario in {} mode", mode_name(mode)))?;
-    let mut run = VirtualRun::new(&s).with_context(|| format!("building the {} run", mode_name(mode)))?;
-    run.run_for(s.run.duration).with_context(|| format!("running the {} exam", mode_name(mode)))?;
+    s.validate()
+        .with_context(|| format!("scenario in {} mode", mode_name(mode)))?;
+    let mut run =
+        VirtualRun::new(&s).with_context(|| format!("building the {} run", mode_name(mode)))?;
+    run.run_for(s.run.duration)
+        .with_context(|| format!("running the {} exam", mode_name(mode)))?;
     let ticks = &run.ticks;
     let norm = |v: [f64; 3]| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
     Ok(ModeTrace {
