@@ -70,17 +70,20 @@ fn press_stops_at_target_force_with_an_ideal_hand() {
     // along z to mid-thigh at 50 mm/s.
     assert!((transitions[5].3.y - (SKIN_Y + 0.005)).abs() < 1e-12);
     assert!((transitions[6].2 - transitions[5].2 - 0.4).abs() < 1e-9);
-    assert!((transitions[6].3.z - 0.15).abs() < 1e-12);
+    assert!((transitions[6].3.z - (-0.01)).abs() < 1e-12);
     assert_eq!(script.status().phase, Done);
     // Done after the second slide's release: the setpoint stays there.
-    assert!((script.setpoint() - Vec3::new(0.0, SKIN_Y + 0.005, 0.17)).norm() < 1e-12);
+    assert!((script.setpoint() - Vec3::new(0.0, SKIN_Y + 0.005, 0.01)).norm() < 1e-12);
     assert!(script.is_done());
     assert_eq!(script.status().repetition, 2);
     // The release rises from the held depth to 5 mm above the skin at 80 mm/s.
     let last = transitions.len() - 1;
     let rise = transitions[last - 1].3.y - SKIN_Y;
     let expected = (0.005 - rise) / 0.08;
-    assert!((transitions[last].2 - transitions[last - 1].2 - expected).abs() < 1e-9);
+    let err = transitions[last].2 - transitions[last - 1].2 - expected;
+    // `rise` is read from the setpoint sampled at the end of the step in
+    // which the release began; allow the two steps that sampling spans.
+    assert!(err.abs() < 2.0 * dt + 1e-9, "release duration off by {err}");
 }
 
 #[test]
@@ -118,7 +121,7 @@ fn phase_timing_does_not_depend_on_step_size() {
         repeat: 1,
         phases: vec![
             PhaseConfig::Approach {
-                point: [0.0, 0.08, 0.15],
+                point: [0.0, 0.08, -0.01],
                 speed: 0.03,
             },
             PhaseConfig::Hold { duration: 0.37 },

@@ -163,7 +163,7 @@ impl LiveSystem {
             vein: AtomicU8::new(vein_code(scenario.patient.vein)),
             haptic: Mutex::new(None),
         });
-        let target = target_on_surface(&scenario, 0.0, 0.5 * scenario.thigh.length, -0.02, 0.0);
+        let target = target_on_surface(&scenario, 0.0, 0.0, -0.02, 0.0);
         let system = Arc::new(LiveSystem {
             shared,
             inner: Mutex::new(Inner {
@@ -638,7 +638,8 @@ impl LiveControl for LiveSystem {
                 tilt,
             } => {
                 finite("theta", theta, -std::f64::consts::PI, std::f64::consts::PI)?;
-                finite("z", z, 0.0, inner.scenario.thigh.length)?;
+                let half = 0.5 * inner.scenario.thigh.length;
+                finite("z", z, -half, half)?;
                 finite("depth", depth, -0.05, 0.04)?;
                 finite("tilt", tilt, -0.6, 0.6)?;
                 let t = target_on_surface(&inner.scenario, theta, z, depth, tilt);

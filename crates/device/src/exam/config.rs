@@ -2,14 +2,14 @@
 //!
 //! ```toml
 //! [exam]
-//! start = [0.0, 0.092, 0.15]          # initial hand setpoint (m, thigh frame)
-//! skin_point = [0.0, 0.072, 0.15]     # a point on the skin at the exam site (m)
+//! start = [0.0, 0.092, -0.01]          # initial hand setpoint (m, thigh frame)
+//! skin_point = [0.0, 0.072, -0.01]     # a point on the skin at the exam site (m)
 //! press_direction = [0.0, -1.0, 0.0]  # into the thigh
 //! repeat = 2                          # the phase list runs twice
 //!
 //! [[exam.phases]]
 //! kind = "approach"
-//! point = [0.0, 0.077, 0.15]          # above the skin (m)
+//! point = [0.0, 0.077, -0.01]          # above the skin (m)
 //! speed = 0.05                        # m/s
 //!
 //! [[exam.phases]]
@@ -100,10 +100,10 @@ pub enum PhaseConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ExamConfig {
-    /// Initial hand setpoint (m, thigh frame). Default `[0, 0.092, 0.15]`
+    /// Initial hand setpoint (m, thigh frame). Default `[0, 0.092, -0.01]`
     /// (20 mm above the skin at mid-thigh).
     pub start: [f64; 3],
-    /// A point on the skin at the exam site (m). Default `[0, 0.072, 0.15]`
+    /// A point on the skin at the exam site (m). Default `[0, 0.072, -0.01]`
     /// (top of the 72 mm semi-axis, middle of a 0.30 m segment).
     pub skin_point: [f64; 3],
     /// Direction of the press, into the thigh (normalized). Default `[0, −1, 0]`.
@@ -120,13 +120,13 @@ pub struct ExamConfig {
 impl Default for ExamConfig {
     fn default() -> Self {
         ExamConfig {
-            start: [0.0, 0.092, 0.15],
-            skin_point: [0.0, 0.072, 0.15],
+            start: [0.0, 0.092, -0.01],
+            skin_point: [0.0, 0.072, -0.01],
             press_direction: [0.0, -1.0, 0.0],
             repeat: 2,
             phases: vec![
                 PhaseConfig::Approach {
-                    point: [0.0, 0.077, 0.15],
+                    point: [0.0, 0.077, -0.01],
                     speed: 0.05,
                 },
                 PhaseConfig::Press {
