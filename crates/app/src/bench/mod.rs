@@ -1,5 +1,6 @@
 //! `echothigh bench ...`: benchmarks that print and write JSON reports.
 
+pub mod contact;
 pub mod haptics;
 pub mod image;
 pub mod link;

@@ -29,6 +29,9 @@ pub struct Args {
     /// Untimed steps before the measured ones.
     #[arg(long, default_value_t = 3)]
     warmup: usize,
+    /// Steps of the contact case (default mesh, probe pressed 10 mm; 0 skips it).
+    #[arg(long, default_value_t = 200)]
+    contact_steps: usize,
 }
 
 /// Runs the benchmark, prints the table on stderr, writes/prints the JSON.
@@ -60,8 +63,16 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             cases.push(r);
         }
     }
+    let contact = if args.contact_steps > 0 {
+        let c = super::contact::contact_report(args.contact_steps)?;
+        eprintln!("contact (default mesh, 10 mm press): {c}");
+        c
+    } else {
+        serde_json::Value::Null
+    };
     let json = serde_json::json!({
         "bench": "physics",
+        "contact": contact,
         "profile": if cfg!(debug_assertions) { "debug" } else { "release" },
         "threads": 1,
         "goals": { "default_mesh_steps_per_s": 1000.0, "nodes_10k_steps_per_s": 100.0 },

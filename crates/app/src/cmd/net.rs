@@ -105,7 +105,6 @@ pub fn server(args: ServerArgs) -> Result<()> {
             token.0,
             scenario
                 .link
-                .clone()
                 .with_seed(scenario.run.seed.wrapping_mul(2).wrapping_add(2)),
             rate,
             Duration::from_secs_f64(args.accept_timeout),
@@ -158,7 +157,6 @@ pub fn client(args: ClientArgs) -> Result<()> {
         token.0,
         scenario
             .link
-            .clone()
             .with_seed(scenario.run.seed.wrapping_mul(2).wrapping_add(1)),
         Duration::from_secs_f64(args.connect_timeout),
         clock.now(),

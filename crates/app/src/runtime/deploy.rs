@@ -32,9 +32,8 @@ pub struct RunOutput {
 /// Builds the scripted device of a scenario.
 pub fn scripted_device(scenario: &Scenario) -> Result<SimulatedDevice> {
     let script = ExamScript::new(scenario.exam.clone()).map_err(anyhow::Error::msg)?;
-    let hand =
-        SimulatedHand::scripted(scenario.hand.clone(), script).map_err(anyhow::Error::msg)?;
-    SimulatedDevice::with_hand(scenario.device.clone(), hand).map_err(anyhow::Error::msg)
+    let hand = SimulatedHand::scripted(scenario.hand, script).map_err(anyhow::Error::msg)?;
+    SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)
 }
 
 /// Runs the scenario on the deterministic virtual clock.
@@ -118,11 +117,9 @@ pub fn run_threads(scenario: &Scenario) -> Result<RunOutput> {
         seed,
         scenario
             .link
-            .clone()
             .with_seed(seed.wrapping_mul(2).wrapping_add(1)),
         scenario
             .link
-            .clone()
             .with_seed(seed.wrapping_mul(2).wrapping_add(2)),
     );
     let mut physics = PhysicsSide::new(scenario)?;

@@ -239,14 +239,13 @@ fn start_session(
         .map_err(|_| anyhow::anyhow!("live state poisoned"))? = Some(status_out);
     let device = if exam {
         let script = ExamScript::new(scenario.exam.clone()).map_err(anyhow::Error::msg)?;
-        let hand =
-            SimulatedHand::scripted(scenario.hand.clone(), script).map_err(anyhow::Error::msg)?;
-        SimulatedDevice::with_hand(scenario.device.clone(), hand).map_err(anyhow::Error::msg)?
+        let hand = SimulatedHand::scripted(scenario.hand, script).map_err(anyhow::Error::msg)?;
+        SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)?
     } else {
-        let hand = SimulatedHand::new(scenario.hand.clone(), Vec3::from(target.position))
+        let hand = SimulatedHand::new(scenario.hand, Vec3::from(target.position))
             .map_err(anyhow::Error::msg)?;
-        let mut d = SimulatedDevice::with_hand(scenario.device.clone(), hand)
-            .map_err(anyhow::Error::msg)?;
+        let mut d =
+            SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)?;
         d.set_state(Vec3::from(target.position), Vec3::zeros());
         d
     };
@@ -256,11 +255,9 @@ fn start_session(
         seed,
         scenario
             .link
-            .clone()
             .with_seed(seed.wrapping_mul(2).wrapping_add(1)),
         scenario
             .link
-            .clone()
             .with_seed(seed.wrapping_mul(2).wrapping_add(2)),
     );
     let (pos_in, pos_out) = triple_buffer::triple_buffer(&(0.0, ProbeMsg::default(), false));

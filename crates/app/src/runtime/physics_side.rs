@@ -62,18 +62,20 @@ impl PhysicsSide {
         let step = self.contact.step(&mut self.model, &pose, h);
         let s = step.sample;
         self.last = Some(s);
-        let mut msg = SampleMsg::default();
-        msg.t_sample = t + h;
-        msg.p = s.p.into();
-        msg.distance = s.distance;
-        msg.gradient = s.gradient.into();
-        msg.stiffness = s.stiffness;
-        msg.force = s.force.into();
-        msg.in_contact = u32::from(s.in_contact);
-        msg.newton_iterations = step.physics.newton_iterations;
-        msg.cg_iterations = step.physics.cg_iterations;
-        msg.limited = step.physics.limited;
-        msg.physics_rate = 1.0 / h;
+        let msg = SampleMsg {
+            t_sample: t + h,
+            p: s.p.into(),
+            distance: s.distance,
+            gradient: s.gradient.into(),
+            stiffness: s.stiffness,
+            force: s.force.into(),
+            in_contact: u32::from(s.in_contact),
+            newton_iterations: step.physics.newton_iterations,
+            cg_iterations: step.physics.cg_iterations,
+            limited: step.physics.limited,
+            physics_rate: 1.0 / h,
+            ..SampleMsg::default()
+        };
         let rec = PhysicsRecord {
             t,
             probe: s.p.into(),

@@ -58,10 +58,9 @@ impl VirtualRun {
     /// `scenario.run.duration`.
     pub fn new(scenario: &Scenario) -> Result<Self> {
         let script = ExamScript::new(scenario.exam.clone()).map_err(anyhow::Error::msg)?;
-        let hand =
-            SimulatedHand::scripted(scenario.hand.clone(), script).map_err(anyhow::Error::msg)?;
-        let device = SimulatedDevice::with_hand(scenario.device.clone(), hand)
-            .map_err(anyhow::Error::msg)?;
+        let hand = SimulatedHand::scripted(scenario.hand, script).map_err(anyhow::Error::msg)?;
+        let device =
+            SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)?;
         Self::with_device(scenario, device)
     }
 
@@ -73,11 +72,9 @@ impl VirtualRun {
         let seed = scenario.run.seed;
         let up = scenario
             .link
-            .clone()
             .with_seed(seed.wrapping_mul(2).wrapping_add(1));
         let down = scenario
             .link
-            .clone()
             .with_seed(seed.wrapping_mul(2).wrapping_add(2));
         let (haptic_end, physics_end) = in_process_pair(seed, up, down);
         let n_ticks = (scenario.run.duration * c.haptic_rate).ceil() as usize + 1;
