@@ -136,3 +136,97 @@ mod tests {
         assert!(ray_triangle(&Vec3::new(5.0, 2.5, 0.0), &d, &a, &b, &c).is_none());
     }
 }
+
+/// A static press of the probe on the physical model.
+#[derive(Debug, Clone)]
+pub struct StaticPress {
+    /// Skin displacement along the image section.
+    pub deformation: SectionDeformation,
+    /// Depth of the probe face below the rest skin (m).
+    pub indentation: f64,
+    /// Contact force reached (N).
+    pub force: f64,
+}
+
+/// Presses the probe, face down at the top of mid-thigh (the exam pose),
+/// into the physical model until the quasi-static contact force reaches
+/// `target` (N): the depth is increased in steps of 0.25 mm, the tissue
+/// settled at each (implicit steps of 10 ms until the force changes by less
+/// than 0.1 %), and the last step bisected. Returns the section under the
+/// probe for the image, with `bone_depth` (m) copied in.
+pub fn press_to_force(
+    physics: &mut super::physics_side::PhysicsSide,
+    scenario: &crate::scenario::Scenario,
+    target: f64,
+    bone_depth: f64,
+) -> anyhow::Result<StaticPress> {
+    use echothigh_transport::ProbeMsg;
+    anyhow::ensure!(
+        target.is_finite() && target >= 0.0,
+        "force must be finite and >= 0 N, got {target}"
+    );
+    let top = scenario.thigh.semi_axis_y;
+    let h = 0.01;
+    let settle = |physics: &mut super::physics_side::PhysicsSide, depth: f64| -> f64 {
+        let probe = ProbeMsg::new(0.0, [0.0, top - depth, 0.0], [1.0, 0.0, 0.0, 0.0], 0);
+        let mut last = f64::NAN;
+        for i in 0..200 {
+            let (s, _) = physics.step(&probe, h, i as f64 * h);
+            let f = Vec3::from(s.force).norm();
+            if (f - last).abs() <= 1e-3 * f.max(1e-3) {
+                return f;
+            }
+            last = f;
+        }
+        last
+    };
+    let step = 0.25e-3;
+    let max_depth = 0.9 * scenario.tissue.asymptote();
+    let (mut lo, mut f_lo) = (0.0, 0.0);
+    let mut depth = 0.0;
+    let mut f = 0.0;
+    while f < target {
+        depth += step;
+        anyhow::ensure!(
+            depth <= max_depth,
+            "{target} N is beyond what the tissue bears before its asymptote ({f_lo:.1} N at {:.1} mm)",
+            lo * 1e3
+        );
+        f = settle(physics, depth);
+        if f < target {
+            lo = depth;
+            f_lo = f;
+        }
+    }
+    if target > 0.0 && f > f_lo {
+        // One secant refinement between the last two depths.
+        let d = lo + (depth - lo) * (target - f_lo) / (f - f_lo);
+        f = settle(physics, d);
+        depth = d;
+    } else if target == 0.0 {
+        depth = 0.0;
+        f = settle(physics, 0.0);
+    }
+    let pose = super::physics_side::probe_pose(&ProbeMsg::new(
+        0.0,
+        [0.0, top - depth, 0.0],
+        [1.0, 0.0, 0.0, 0.0],
+        0,
+    ));
+    let img = scenario.imaging_config();
+    let mut out = SectionDeformation::rest(bone_depth);
+    section_deformation(
+        physics.model(),
+        &pose,
+        img.width,
+        81,
+        bone_depth,
+        &mut SectionScratch::default(),
+        &mut out,
+    );
+    Ok(StaticPress {
+        deformation: out,
+        indentation: depth,
+        force: f,
+    })
+}
