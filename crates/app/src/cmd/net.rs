@@ -190,7 +190,7 @@ pub fn client(args: ClientArgs) -> Result<()> {
         &[],
         report.timing.missed_deadlines,
         scenario.run.duration,
-        welcome.physics_rate,
+        report.physics_rate,
         report.faults,
         report.link.duplicate + report.link.stale + report.link.malformed,
         0,

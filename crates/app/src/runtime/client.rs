@@ -43,6 +43,8 @@ pub struct ClientReport {
     pub link: LinkStats,
     /// Samples received.
     pub samples: u64,
+    /// Physics rate achieved, as the last sample reported it (Hz).
+    pub physics_rate: f64,
     /// Non-finite forces caught before the device.
     pub faults: u64,
 }
@@ -152,6 +154,7 @@ pub fn run_client(
     let mut last_sent = -1.0;
     let mut lost_at = None;
     let mut started = None;
+    let mut physics_rate = 0.0;
     while !handle.is_finished() {
         let now = clock.now();
         if let Some(link) = link.as_mut() {
@@ -168,6 +171,7 @@ pub fn run_client(
             while let Some(m) = link.recv(now).context("haptic link")? {
                 if let Message::Sample(s) = m {
                     sink.on_sample(&s, now);
+                    physics_rate = s.physics_rate;
                 }
             }
             let t0 = *started.get_or_insert(now);
@@ -212,6 +216,7 @@ pub fn run_client(
         timing: result.runner.summary(),
         link: link_stats,
         samples: sink.count(),
+        physics_rate,
         faults: result.faults,
     })
 }
