@@ -133,6 +133,15 @@ fn every_bad_datagram_reaching_an_endpoint_is_counted() {
     drop(client);
     let raw = UdpSocket::bind(client_addr).unwrap();
     raw.connect(server_addr).unwrap();
+    // Handshake datagrams still in flight (the client resends its Hello
+    // every 20 ms until it hears the Welcome; on a loaded machine one may
+    // arrive late) are legitimate: drain them and count from here.
+    let drain_until = Instant::now() + Duration::from_millis(100);
+    while Instant::now() < drain_until {
+        let _ = server.recv(1.0).unwrap();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    let base = server.stats();
 
     let mut rng = ChaCha8Rng::seed_from_u64(2024);
     let n = 2000u64;
@@ -150,16 +159,22 @@ fn every_bad_datagram_reaching_an_endpoint_is_counted() {
                 "a bad datagram was delivered"
             );
             let s = server.stats();
-            if s.malformed + s.wrong_token >= target || start.elapsed() > Duration::from_secs(2) {
+            if s.malformed + s.wrong_token >= base.malformed + base.wrong_token + target
+                || start.elapsed() > Duration::from_secs(2)
+            {
                 break;
             }
             std::thread::sleep(Duration::from_micros(100));
         }
     }
     let s = server.stats();
-    assert_eq!(s.malformed + s.wrong_token, n, "{s:?}");
-    assert!(s.wrong_token > 0 && s.malformed > 0);
-    assert_eq!(s.received, 0);
+    assert_eq!(
+        s.malformed + s.wrong_token - base.malformed - base.wrong_token,
+        n,
+        "{s:?}"
+    );
+    assert!(s.wrong_token > base.wrong_token && s.malformed > base.malformed);
+    assert_eq!(s.received, base.received, "a bad datagram was accepted");
     // The link still works afterwards.
     let mut good = valid_messages()[0];
     good.header_mut().seq = 10_000;
