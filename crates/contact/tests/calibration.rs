@@ -29,15 +29,11 @@ fn default_model_indentation_is_monotonic_and_in_the_band() {
     // Initial stiffness (secant over the first 3 mm) 0.3–0.7 N/mm.
     let k0 = c.force_at(0.003) / 3.0;
     assert!((0.3..=0.7).contains(&k0), "initial stiffness {k0} N/mm");
-    // ~10–20 N at 15–20 mm. The fitted model reaches 22.4 N at 20 mm: its
-    // normal springs are at their most linear (asymptote = tissue
-    // thickness) and the rest of its stiffening comes from the membrane and
-    // the layer's shear, which the fit cannot shape like the data's
-    // exponential (rms residual ~2 N); the bound at 20 mm is 25 N.
+    // ~10–20 N at 15–20 mm.
     let f15 = c.force_at(0.015);
     assert!((10.0..=20.0).contains(&f15), "{f15} N at 15 mm");
     let f20 = c.force_at(0.020);
-    assert!((10.0..=25.0).contains(&f20), "{f20} N at 20 mm");
+    assert!((10.0..=20.0).contains(&f20), "{f20} N at 20 mm");
     // Strongly stiffening: the final stiffness is well above the initial one.
     let k_end = (c.force_at(0.020) - c.force_at(0.018)) / 2.0;
     assert!(k_end > 2.0 * k0, "k at 19 mm {k_end} vs {k0} N/mm");
@@ -51,7 +47,7 @@ fn default_model_indentation_is_monotonic_and_in_the_band() {
         .sum::<f64>()
         / data.depth.len() as f64)
         .sqrt();
-    assert!(rms < 2.5, "default model vs default data: rms {rms} N");
+    assert!(rms < 0.2, "default model vs default data: rms {rms} N");
 }
 
 #[test]
@@ -60,8 +56,12 @@ fn fitter_recovers_parameters_of_a_model_generated_curve() {
     model.thigh.n_theta = 24;
     model.thigh.n_z = 11;
     let truth = (model.tissue.normal_a * 1.3, model.tissue.normal_b * 0.8);
+    // Start with the asymptote at its bound (the tissue thickness), where
+    // the fitted logit is flat: the fitter must still leave it.
+    let mut start = model.clone();
+    start.tissue.normal_a = start.tissue.normal_b / (0.9999 * start.thigh.tissue_thickness);
     let mut cal = Calibration {
-        model: model.clone(),
+        model: start,
         parameters: vec![FitParameter::NormalB, FitParameter::Asymptote],
         ..Calibration::default()
     };

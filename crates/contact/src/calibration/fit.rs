@@ -66,10 +66,15 @@ impl FitParameter {
     }
 
     /// The fitted coordinate of a value: `ln v`, or `logit v` for the
-    /// asymptote fraction.
+    /// asymptote fraction. A starting fraction near a bound is moved to
+    /// [0.05, 0.95] first: at the bound the logit's derivative vanishes
+    /// (`dv/dc = v(1 − v)`) and the fitter could never leave it.
     fn coordinate_of(&self, v: f64) -> f64 {
         match self {
-            Self::Asymptote => (v / (1.0 - v)).ln(),
+            Self::Asymptote => {
+                let v = v.clamp(0.05, 0.95);
+                (v / (1.0 - v)).ln()
+            }
             _ => v.ln(),
         }
     }

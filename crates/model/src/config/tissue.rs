@@ -41,7 +41,7 @@ use serde::{Deserialize, Serialize};
 pub struct TissueParams {
     /// Mass per unit skin area carried by the surface nodes (kg/m²). Default 10.
     pub areal_density: f64,
-    /// Membrane modulus of the structural springs (θ and z neighbours) (N/m). Default 193.5 (calibrated, see below).
+    /// Membrane modulus of the structural springs (θ and z neighbours) (N/m). Default 100.8 (calibrated, see below).
     pub structural_stiffness: f64,
     /// Membrane modulus of the shear springs (quad diagonals) (N/m). Default 50.
     pub shear_stiffness: f64,
@@ -53,10 +53,10 @@ pub struct TissueParams {
     pub shear_damping: f64,
     /// Damping modulus of the bending springs' dampers (N·s/m). Default 0.02.
     pub bending_damping: f64,
-    /// Normal spring `a` per unit area (m²/N = 1/Pa). Default 5.303e-5.
+    /// Normal spring `a` per unit area (m²/N = 1/Pa). Default 7.638e-5.
     pub normal_a: f64,
     /// Normal spring `b` per unit area (m³/N = m/Pa): `1/normal_b` is the
-    /// initial stiffness per unit area. Default 2.121e-6 (asymptote 40.0 mm).
+    /// initial stiffness per unit area. Default 2.865e-6 (asymptote 37.5 mm).
     pub normal_b: f64,
     /// Normal damper per unit area (N·s/m³): node damping = this × node area. Default 2000.
     pub normal_damping: f64,
@@ -76,14 +76,14 @@ impl Default for TissueParams {
     fn default() -> Self {
         TissueParams {
             areal_density: 10.0,
-            structural_stiffness: 193.5,
+            structural_stiffness: 100.8,
             shear_stiffness: 50.0,
             bending_stiffness: 20.0,
             structural_damping: 0.2,
             shear_damping: 0.05,
             bending_damping: 0.02,
-            normal_a: 5.303e-5,
-            normal_b: 2.121e-6,
+            normal_a: 7.638e-5,
+            normal_b: 2.865e-6,
             normal_damping: 2000.0,
             tangential_stiffness: 1.0e6,
             tangential_damping: 500.0,
