@@ -121,8 +121,11 @@ fn buffer_is_smoother_than_hold() {
     assert!(m.buffer.rms_error < m.hold.rms_error);
 }
 
-/// `buffer` at 100 Hz stays within 10 % of the peak force of `direct` (RMS).
-/// At mid-thigh it measures 2.4 % (`docs/fig4/table.md`).
+/// `buffer` at 100 Hz stays within 10 % of the peak force of `direct` (RMS),
+/// and never further than 20 % of it at any tick: no phantom contact at
+/// lift-off (a parameter blend of successive spheres once rendered 6 N there
+/// while `direct` was free). It measures 2.3 % RMS and 0.9 N at worst
+/// (`docs/fig4/table.md`).
 #[test]
 fn buffer_tracks_direct() {
     let m = &shared().metrics;
@@ -130,6 +133,12 @@ fn buffer_tracks_direct() {
         m.buffer.rms_error_rel < 0.10,
         "buffer RMS error {:.1} % of the peak",
         100.0 * m.buffer.rms_error_rel
+    );
+    assert!(
+        m.buffer.peak_error < 0.2 * m.direct.peak_force,
+        "buffer peak error {:.2} N vs direct peak {:.2} N",
+        m.buffer.peak_error,
+        m.direct.peak_force
     );
 }
 
@@ -160,7 +169,7 @@ fn deterministic_and_written() {
 
 /// Over the human range of hand damping (2 N·s/m to 10 N·s/m), `hold`
 /// trembles at the light end and stops above the sampled-data boundary
-/// `b_device + b_hand > K (T/2 + τ)` (predicted ~6 N·s/m at mid-thigh),
+/// `b_device + b_hand > K (T/2 + τ)` (predicted ~5.4 N·s/m at mid-thigh),
 /// which the sweep brackets, while `buffer` (like `direct`) never trembles.
 #[test]
 fn damping_sweep_shows_the_boundary() {

@@ -160,7 +160,9 @@ pub struct RenderConfig {
     pub texture_amplitude: f64,
     /// Texture wavelength, m. Default 0.002.
     pub texture_wavelength: f64,
-    /// Blend new model parameters over the estimated physics period (force shading). Default true.
+    /// Blend the displayed constraint into each new model over the estimated
+    /// physics period (force shading; DESIGN §3 blends the parameters, we blend
+    /// the constraint functions, which cannot bulge: see `shading`). Default true.
     pub shading: bool,
     /// Largest force magnitude rendered, N (tissue side; the app scales to the device). Default 20.
     pub max_force: f64,

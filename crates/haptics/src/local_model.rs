@@ -191,27 +191,6 @@ impl LocalModel for ModelParams {
     }
 }
 
-impl ModelParams {
-    /// Linear blend of the parameters, `(1 − α) u_self + α u_to` (force
-    /// shading); a plane's normal is re-normalized. Models of different kinds
-    /// do not blend: the result is `to` for `α > 0`.
-    pub fn blend(&self, to: &ModelParams, alpha: f64) -> ModelParams {
-        let same_kind = matches!(
-            (self, to),
-            (ModelParams::Sphere(_), ModelParams::Sphere(_))
-                | (ModelParams::Plane(_), ModelParams::Plane(_))
-        );
-        if alpha >= 1.0 || !same_kind {
-            return if alpha > 0.0 { *to } else { *self };
-        }
-        if alpha <= 0.0 {
-            return *self;
-        }
-        let u = self.params() * (1.0 - alpha) + to.params() * alpha;
-        to.with_params(&u)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -290,21 +269,5 @@ mod tests {
         j.row_mut(0).copy_from(&s.value_du(&x).transpose());
         j.fixed_view_mut::<3, 4>(1, 0).copy_from(&s.gradient_du(&x));
         assert_eq!(j.rank(1e-12), 3);
-    }
-
-    #[test]
-    fn blend_is_endpoint_exact() {
-        let a = ModelParams::Sphere(Sphere {
-            center: Vec3::zeros(),
-            radius: 0.1,
-        });
-        let b = ModelParams::Sphere(Sphere {
-            center: Vec3::new(0.0, 0.01, 0.0),
-            radius: 0.12,
-        });
-        assert_eq!(a.blend(&b, 0.0), a);
-        assert_eq!(a.blend(&b, 1.0), b);
-        let m = a.blend(&b, 0.5);
-        assert!((m.params() - Params::new(0.0, 0.005, 0.0, 0.11)).norm() < 1e-15);
     }
 }

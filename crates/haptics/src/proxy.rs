@@ -15,15 +15,17 @@
 //! hysteresis, CHAI3D's behaviour) and the surface carries a texture (a
 //! height perturbation, Ruspini's "controlling the constraint plane").
 
-use crate::local_model::{LocalModel, ModelParams};
+use crate::local_model::LocalModel;
+use crate::shading::ShadedModel;
 use crate::Vec3;
 
 /// Constraint surface `φ_eff(x) = φ(u, x) − h(x) = 0` with texture height
 /// `h(x) = A · (sin 2πx/λ + sin 2πy/λ + sin 2πz/λ)/3`, m (|h| ≤ A).
 #[derive(Debug, Clone, Copy)]
 pub struct Surface {
-    /// The buffer model.
-    pub model: ModelParams,
+    /// The buffer model, shaded between successive models (a single model
+    /// converts with `.into()`).
+    pub model: ShadedModel,
     /// Texture amplitude `A`, m.
     pub amplitude: f64,
     /// Texture wavelength `λ`, m.
@@ -60,22 +62,29 @@ impl Surface {
     }
 
     /// Outward unit normal of the model at `x` (texture does not tilt it).
+    /// Where a shaded blend's gradient vanishes (opposite normals in equal
+    /// weights) the newest model's normal is used.
     pub fn normal(&self, x: &Vec3) -> Vec3 {
-        self.model.gradient(x)
+        self.model
+            .gradient(x)
+            .try_normalize(1e-9)
+            .unwrap_or_else(|| self.model.newest().gradient(x))
     }
 
     /// Re-projects `x` onto `φ_eff = 0` along the normal `n`: Newton steps
-    /// `s = φ_eff / (1 − n·∇h)` (one is exact for the untextured sphere and
-    /// plane; the slope is floored at 0.2 for steep textures).
+    /// `s = φ_eff / (|∇φ| − n·∇h)` (one is exact for the untextured sphere
+    /// and plane; a few for a shaded blend; the slope is floored at 0.2 for
+    /// steep textures and blends of diverging normals).
     pub fn project(&self, x: &Vec3) -> Vec3 {
         let mut x = *x;
-        for _ in 0..8 {
+        for _ in 0..MAX_PROJECTION_STEPS {
             let f = self.value(&x);
             if f.abs() < 1e-13 {
                 break;
             }
+            let g = self.model.gradient(&x);
             let n = self.normal(&x);
-            let slope = (1.0 - n.dot(&self.texture_gradient(&x))).max(0.2);
+            let slope = (g.dot(&n) - n.dot(&self.texture_gradient(&x))).max(0.2);
             x -= n * (f / slope);
         }
         x
@@ -128,6 +137,9 @@ pub struct Proxy {
 /// pass).
 const MAX_PASSES: usize = 8;
 
+/// Newton steps of a re-projection onto the surface.
+const MAX_PROJECTION_STEPS: usize = 8;
+
 /// Distance beyond which a proxy counts as off the surface, m.
 const ON_SURFACE: f64 = 1e-9;
 
@@ -143,7 +155,8 @@ impl Proxy {
 
     /// The constrained minimum of `½|x − p|²` on `φ_eff = 0` near the proxy
     /// `x` (the frictionless proxy). Both local models are exact signed
-    /// distances, so the re-projection of `p` is the minimum; it is accepted
+    /// distances, so the re-projection of `p` is the minimum (nearly so for
+    /// a shaded blend of two); it is accepted
     /// only on the proxy's side of the surface (normals within 90°: no
     /// pop-through), else the paper's tangent-plane steps start from `x`.
     /// Tangent-plane passes then polish it (textured surfaces).
@@ -217,14 +230,15 @@ impl Proxy {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::local_model::{Plane, Sphere};
+    use crate::local_model::{ModelParams, Plane, Sphere};
 
     fn floor() -> Surface {
         Surface {
             model: ModelParams::Plane(Plane {
                 normal: Vec3::y(),
                 offset: 0.0,
-            }),
+            })
+            .into(),
             amplitude: 0.0,
             wavelength: 0.002,
         }
@@ -252,7 +266,8 @@ mod tests {
             model: ModelParams::Sphere(Sphere {
                 center: Vec3::zeros(),
                 radius: 0.1,
-            }),
+            })
+            .into(),
             ..floor()
         };
         let mut x = Proxy::new(Vec3::new(0.0, 0.11, 0.0));

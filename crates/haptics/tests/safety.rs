@@ -204,3 +204,43 @@ fn config_parses_validates_and_names_keys() {
     assert!(d.validate("haptics").is_ok());
     assert_eq!((d.fit.window, d.fit.forgetting), (8, 0.7));
 }
+
+/// Lift-off: successive fits on either side of a device that is outside
+/// both (spheres whose centres are offset sideways, as fits of a surface
+/// springing back under a receding probe). A blend of their parameters
+/// would bulge 10 mm over the device; shading the constraint functions must
+/// render no force at any tick, across an early arrival as well.
+#[test]
+fn shading_never_renders_contact_outside_both_models() {
+    use echothigh_haptics::Sphere;
+    let sphere = |x: f64| {
+        ModelParams::Sphere(Sphere {
+            center: Vec3::new(x, 0.0, 0.0),
+            radius: 0.07,
+        })
+    };
+    let (a, b, c) = (sphere(0.05), sphere(-0.05), sphere(0.04));
+    let p = Vec3::new(0.0, 0.06, 0.0);
+    assert!(a.value(&p) > 0.0 && b.value(&p) > 0.0 && c.value(&p) > 0.0);
+    let (mut tx, rx) = handoff();
+    let mut r = HapticRenderer::new(&frictionless(1e6, true), rx).unwrap();
+    publish(&mut tx, a, 1000.0, 1);
+    let mut t = 0.0;
+    for i in 0..40 {
+        match i {
+            5 => publish(&mut tx, b, 1000.0, 2),
+            // 6 ticks into a 10-tick blend: an early arrival.
+            11 => publish(&mut tx, c, 1000.0, 3),
+            14 => publish(&mut tx, a, 1000.0, 4),
+            _ => {}
+        }
+        let f = r.tick(p, t);
+        assert_eq!(
+            f,
+            Vec3::zeros(),
+            "tick {i}: contact rendered outside every model"
+        );
+        assert!(!r.output().in_contact);
+        t += DT;
+    }
+}
