@@ -87,6 +87,13 @@ impl DeviceConfig {
     pub fn force_scale(&self) -> ForceScale {
         ForceScale::new(self.force_scale).unwrap_or_default()
     }
+
+    /// The largest stiffness the haptic loop may render, in tissue units
+    /// (N/m): `max_stiffness / force_scale`, since the device displays
+    /// `scale × k_tissue` (see [`ForceScale`]).
+    pub fn tissue_max_stiffness(&self) -> f64 {
+        self.max_stiffness / self.force_scale().value()
+    }
 }
 
 /// Parameters of the simulated hand's impedance (`[hand]`).

@@ -19,6 +19,19 @@ fn defaults_are_valid() {
     ExamConfig::default().validate("exam").unwrap();
 }
 
+/// The device displays `scale × k_tissue`: its 1000 N/m limit at scale
+/// 0.3 allows 3333 N/m of tissue stiffness.
+#[test]
+fn tissue_stiffness_limit_is_the_device_limit_over_the_scale() {
+    let d = DeviceConfig::default();
+    assert!((d.tissue_max_stiffness() - 1000.0 / 0.3).abs() < 1e-9);
+    let firm = DeviceConfig {
+        force_scale: 1.0,
+        ..d
+    };
+    assert_eq!(firm.tissue_max_stiffness(), 1000.0);
+}
+
 #[test]
 fn device_and_hand_errors_name_the_key() {
     let cases: [(DeviceConfig, &str); 5] = [

@@ -32,6 +32,9 @@ pub mod flags {
     pub const FAULT_NUMERIC: u32 = 1 << 6;
     /// A force-shading blend is in progress.
     pub const SHADING: u32 = 1 << 7;
+    /// The model's stiffness exceeded the device's stable limit: rendered
+    /// at the limit.
+    pub const STIFFNESS_LIMITED: u32 = 1 << 8;
     /// Any fault bit.
     pub const ANY_FAULT: u32 = FAULT_INPUT | FAULT_MODEL | FAULT_NUMERIC;
 }
@@ -47,7 +50,7 @@ pub struct TickOutput {
     pub proxy: Vec3,
     /// Force displayed, N (tissue units, thigh frame).
     pub force: Vec3,
-    /// Stiffness rendered `k`, N/m (shaded).
+    /// Stiffness rendered `k`, N/m (shaded, then limited).
     pub stiffness: f64,
     /// Time since the current model arrived, s (loop clock).
     pub model_age: f64,
@@ -76,6 +79,7 @@ pub struct HapticRenderer {
     arrival: f64,
     shading: Shading,
     proxy: Proxy,
+    max_stiffness: f64,
     last_force: Vec3,
     last_time: Option<f64>,
     output: TickOutput,
@@ -97,10 +101,27 @@ impl HapticRenderer {
             arrival: 0.0,
             shading: Shading::settled(none.params, 0.0),
             proxy: Proxy::new(Vec3::zeros()),
+            max_stiffness: f64::INFINITY,
             last_force: Vec3::zeros(),
             last_time: None,
             output: TickOutput::default(),
         })
+    }
+
+    /// Sets the largest stiffness rendered, N/m (tissue units; default
+    /// unlimited): the device's stable stiffness over the force scale. A
+    /// stiffer buffer model is rendered at this stiffness (the probe sinks
+    /// deeper than in the tissue instead of making the device unstable), and
+    /// the tick is flagged [`flags::STIFFNESS_LIMITED`].
+    pub fn set_max_stiffness(&mut self, k: f64) -> Result<(), ConfigError> {
+        if k.is_nan() || k <= 0.0 {
+            return Err(ConfigError::Invalid {
+                key: "device.max_stiffness / device.force_scale".into(),
+                reason: format!("the rendered stiffness limit must be > 0 N/m, got {k}"),
+            });
+        }
+        self.max_stiffness = k;
+        Ok(())
     }
 
     /// Telemetry of the last tick.
@@ -131,7 +152,10 @@ impl HapticRenderer {
             self.proxy = Proxy::new(p);
         } else {
             let (u, k_shaded, a) = self.shading.at(now);
-            (k, alpha) = (k_shaded, a);
+            (k, alpha) = (k_shaded.min(self.max_stiffness), a);
+            if k < k_shaded {
+                flags |= flags::STIFFNESS_LIMITED;
+            }
             if alpha < 1.0 {
                 flags |= flags::SHADING;
             }

@@ -244,3 +244,25 @@ fn shading_never_renders_contact_outside_both_models() {
         t += DT;
     }
 }
+
+/// A model stiffer than the device's stable limit is rendered at the limit
+/// (and flagged); a softer one is untouched; a limit ≤ 0 or NaN is refused.
+#[test]
+fn stiffness_is_limited_to_the_device() {
+    let (mut tx, rx) = handoff();
+    let mut r = HapticRenderer::new(&frictionless(1e9, false), rx).unwrap();
+    assert!(r.set_max_stiffness(0.0).is_err());
+    assert!(r.set_max_stiffness(f64::NAN).is_err());
+    r.set_max_stiffness(3000.0).unwrap();
+    let p = Vec3::new(0.0, -0.005, 0.0);
+    publish(&mut tx, plane(Vec3::y(), 0.0), 10_000.0, 1);
+    r.tick(Vec3::new(0.0, 0.01, 0.0), 0.0);
+    let f = r.tick(p, DT);
+    assert!((f - Vec3::new(0.0, 15.0, 0.0)).norm() < 1e-9, "{f:?}");
+    assert_eq!(r.output().stiffness, 3000.0);
+    assert_ne!(r.output().flags & flags::STIFFNESS_LIMITED, 0);
+    publish(&mut tx, plane(Vec3::y(), 0.0), 2000.0, 2);
+    let f = r.tick(p, 2.0 * DT);
+    assert!((f - Vec3::new(0.0, 10.0, 0.0)).norm() < 1e-9, "{f:?}");
+    assert_eq!(r.output().flags & flags::STIFFNESS_LIMITED, 0);
+}

@@ -168,7 +168,12 @@ pub fn client(args: ClientArgs) -> Result<()> {
         welcome.physics_rate
     );
     let device = scripted_device(&scenario)?;
-    let (sink, source) = haptic_side(c.mode, &scenario.haptics).map_err(anyhow::Error::msg)?;
+    let (sink, source) = haptic_side(
+        c.mode,
+        &scenario.haptics,
+        scenario.device.tissue_max_stiffness(),
+    )
+    .map_err(anyhow::Error::msg)?;
     let parts = LoopParts {
         device,
         source,

@@ -75,7 +75,12 @@ pub fn run_threads(scenario: &Scenario) -> Result<RunOutput> {
     let c = &scenario.coupling;
     let duration = scenario.run.duration;
     let device = scripted_device(scenario)?;
-    let (sink, source) = haptic_side(c.mode, &scenario.haptics).map_err(anyhow::Error::msg)?;
+    let (sink, source) = haptic_side(
+        c.mode,
+        &scenario.haptics,
+        scenario.device.tissue_max_stiffness(),
+    )
+    .map_err(anyhow::Error::msg)?;
     let scale = scenario.device.force_scale();
     if c.mode == CouplingMode::Direct {
         let physics = PhysicsSide::new(scenario)?;

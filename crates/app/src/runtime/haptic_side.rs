@@ -66,13 +66,18 @@ pub fn to_sample(msg: &SampleMsg) -> Sample {
 }
 
 /// Builds the connected pair for `mode` (allocates; call at setup).
+/// `max_stiffness` is the largest stiffness the loop may render, N/m in
+/// tissue units (the device's stable stiffness over the force scale:
+/// `DeviceConfig::tissue_max_stiffness`).
 pub fn haptic_side(
     mode: CouplingMode,
     config: &HapticsConfig,
+    max_stiffness: f64,
 ) -> Result<(SampleSink, ForceSource), echothigh_haptics::ConfigError> {
     let (publisher, receiver) = handoff();
     let manager = ModelManager::new(&config.fit, publisher)?;
-    let renderer = HapticRenderer::new(&config.render, receiver)?;
+    let mut renderer = HapticRenderer::new(&config.render, receiver)?;
+    renderer.set_max_stiffness(max_stiffness)?;
     let (held_in, held_out) = triple_buffer::triple_buffer(&HeldForce::default());
     Ok((
         SampleSink {

@@ -249,7 +249,12 @@ fn start_session(
         d.set_state(Vec3::from(target.position), Vec3::zeros());
         d
     };
-    let (sink, source) = haptic_side(c.mode, &scenario.haptics).map_err(anyhow::Error::msg)?;
+    let (sink, source) = haptic_side(
+        c.mode,
+        &scenario.haptics,
+        scenario.device.tissue_max_stiffness(),
+    )
+    .map_err(anyhow::Error::msg)?;
     let seed = scenario.run.seed;
     let (haptic_end, physics_end) = in_process_pair(
         seed,

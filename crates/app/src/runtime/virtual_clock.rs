@@ -68,7 +68,12 @@ impl VirtualRun {
     pub fn with_device(scenario: &Scenario, device: SimulatedDevice) -> Result<Self> {
         let c = &scenario.coupling;
         let physics = PhysicsSide::new(scenario).context("building the physical model")?;
-        let (sink, source) = haptic_side(c.mode, &scenario.haptics).map_err(anyhow::Error::msg)?;
+        let (sink, source) = haptic_side(
+            c.mode,
+            &scenario.haptics,
+            scenario.device.tissue_max_stiffness(),
+        )
+        .map_err(anyhow::Error::msg)?;
         let seed = scenario.run.seed;
         let up = scenario
             .link
