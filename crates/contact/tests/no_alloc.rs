@@ -3,29 +3,10 @@
 
 use echothigh_contact::{ContactParams, Probe, ProbeContact};
 use echothigh_model::{ModelConfig, ThighModel, Vec3};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        System.alloc(layout)
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        System.dealloc(ptr, layout)
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        System.realloc(ptr, layout, new_size)
-    }
-}
+use echothigh_testkit::{count_allocations, CountingAllocator};
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn contact_step_and_queries_do_not_allocate() {
@@ -38,18 +19,19 @@ fn contact_step_and_queries_do_not_allocate() {
     for i in 0..10 {
         pc.step(&mut model, &pose(0.004 - 0.001 * i as f64), 0.01);
     }
-    let before = ALLOCATIONS.load(Ordering::Relaxed);
-    let mut touched = 0;
-    for i in 0..40 {
-        // Approach from 3 mm above to 8 mm deep and back: both query paths.
-        let d = -0.003 + 0.011 * (1.0 - ((i as f64 - 20.0) / 20.0).abs());
-        let s = pc.step(&mut model, &pose(d), 0.01);
-        touched += s.sample.in_contact as usize;
-    }
-    let after = ALLOCATIONS.load(Ordering::Relaxed);
+    let (touched, n) = count_allocations(|| {
+        let mut touched = 0;
+        for i in 0..40 {
+            // Approach from 3 mm above to 8 mm deep and back: both query paths.
+            let d = -0.003 + 0.011 * (1.0 - ((i as f64 - 20.0) / 20.0).abs());
+            let s = pc.step(&mut model, &pose(d), 0.01);
+            touched += s.sample.in_contact as usize;
+        }
+        touched
+    });
     assert!(
         touched > 10 && touched < 40,
         "both paths exercised: {touched}"
     );
-    assert_eq!(after - before, 0, "allocations during 40 contact steps");
+    assert_eq!(n, 0, "allocations during 40 contact steps");
 }

@@ -3,39 +3,15 @@
 //! every 10 ticks, counted by a global allocator. One test function so that
 //! no other thread allocates while counting.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-
 use echothigh_haptics::{
     handoff, FitConfig, HapticRenderer, ModelManager, RenderConfig, Sample, TickTiming, TimingRing,
     Vec3,
 };
 
-struct Counting;
-
-static COUNTING: AtomicBool = AtomicBool::new(false);
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if COUNTING.load(Ordering::Relaxed) {
-            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        }
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if COUNTING.load(Ordering::Relaxed) {
-            ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
-        }
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+use echothigh_testkit::{count_allocations, CountingAllocator};
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn tick_and_update_do_not_allocate() {
@@ -50,48 +26,44 @@ fn tick_and_update_do_not_allocate() {
     let (c, radius, k) = (Vec3::new(0.0, -0.08, 0.0), 0.08, 500.0);
     let mut checksum = 0.0;
 
-    COUNTING.store(true, Ordering::SeqCst);
-    for i in 0..100_000u32 {
-        let t = f64::from(i) * 1e-3;
-        // Press 0–8 mm while sliding on a 2 cm circle.
-        let lateral = Vec3::new(0.02 * (3.0 * t).cos(), 0.0, 0.02 * (3.0 * t).sin());
-        let dir = (Vec3::new(0.0, radius, 0.0) + lateral).normalize();
-        let p = c + dir * (radius + 0.002 - 0.005 * (1.0 - (0.9 * t).cos()));
-        if i % 10 == 0 {
-            let rho = (p - c).norm();
-            let report = manager.update(&Sample {
-                time: t,
-                p,
-                distance: rho - radius,
-                gradient: (p - c) / rho,
-                stiffness: k,
+    let ((), n) = count_allocations(|| {
+        for i in 0..100_000u32 {
+            let t = f64::from(i) * 1e-3;
+            // Press 0–8 mm while sliding on a 2 cm circle.
+            let lateral = Vec3::new(0.02 * (3.0 * t).cos(), 0.0, 0.02 * (3.0 * t).sin());
+            let dir = (Vec3::new(0.0, radius, 0.0) + lateral).normalize();
+            let p = c + dir * (radius + 0.002 - 0.005 * (1.0 - (0.9 * t).cos()));
+            if i % 10 == 0 {
+                let rho = (p - c).norm();
+                let report = manager.update(&Sample {
+                    time: t,
+                    p,
+                    distance: rho - radius,
+                    gradient: (p - c) / rho,
+                    stiffness: k,
+                });
+                checksum += report.residual;
+            }
+            if i == 50_000 {
+                // A rejected sample and a NaN tick on the way.
+                manager.update(&Sample {
+                    time: t,
+                    p: Vec3::new(f64::NAN, 0.0, 0.0),
+                    distance: 0.0,
+                    gradient: Vec3::y(),
+                    stiffness: k,
+                });
+                renderer.tick(Vec3::new(f64::NAN, 0.0, 0.0), t);
+            }
+            let f = renderer.tick(p, t);
+            checksum += f.norm();
+            ring.push(TickTiming {
+                compute_ns: i,
+                period_error_ns: 0,
             });
-            checksum += report.residual;
         }
-        if i == 50_000 {
-            // A rejected sample and a NaN tick on the way.
-            manager.update(&Sample {
-                time: t,
-                p: Vec3::new(f64::NAN, 0.0, 0.0),
-                distance: 0.0,
-                gradient: Vec3::y(),
-                stiffness: k,
-            });
-            renderer.tick(Vec3::new(f64::NAN, 0.0, 0.0), t);
-        }
-        let f = renderer.tick(p, t);
-        checksum += f.norm();
-        ring.push(TickTiming {
-            compute_ns: i,
-            period_error_ns: 0,
-        });
-    }
-    COUNTING.store(false, Ordering::SeqCst);
+    });
 
     assert!(checksum.is_finite() && checksum > 0.0);
-    assert_eq!(
-        ALLOCATIONS.load(Ordering::SeqCst),
-        0,
-        "allocations in the hot loop"
-    );
+    assert_eq!(n, 0, "allocations in the hot loop");
 }

@@ -4,29 +4,10 @@
 mod common;
 
 use echothigh_model::{NoExtraForce, Vec3};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-struct Counting;
-
-static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
-
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        System.alloc(layout)
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        System.dealloc(ptr, layout)
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
-        System.realloc(ptr, layout, new_size)
-    }
-}
+use echothigh_testkit::{count_allocations, CountingAllocator};
 
 #[global_allocator]
-static GLOBAL: Counting = Counting;
+static GLOBAL: CountingAllocator = CountingAllocator;
 
 #[test]
 fn steps_and_stiffness_solves_allocate_nothing() {
@@ -41,14 +22,14 @@ fn steps_and_stiffness_solves_allocate_nothing() {
     m.step(0.01, &mut NoExtraForce); // warm-up
     m.solve_stiffness(&mut NoExtraForce, &rhs, &mut out);
 
-    let before = ALLOCATIONS.load(Ordering::SeqCst);
-    let mut work = 0;
-    for _ in 0..20 {
-        let s = m.step(0.01, &mut NoExtraForce);
-        work += s.cg_iterations;
-    }
-    let s = m.solve_stiffness(&mut NoExtraForce, &rhs, &mut out);
-    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    let ((work, s), n) = count_allocations(|| {
+        let mut work = 0;
+        for _ in 0..20 {
+            let s = m.step(0.01, &mut NoExtraForce);
+            work += s.cg_iterations;
+        }
+        (work, m.solve_stiffness(&mut NoExtraForce, &rhs, &mut out))
+    });
     assert!(work > 0 && s.iterations > 0, "the steps must do real work");
-    assert_eq!(after - before, 0, "allocations during steps");
+    assert_eq!(n, 0, "allocations during steps");
 }
