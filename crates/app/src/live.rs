@@ -39,15 +39,13 @@ pub struct LiveMesh {
     pub triangles: Vec<[u32; 3]>,
 }
 
-/// Latest state of the live system. Filled in place to avoid allocation.
-#[derive(Debug, Clone, Default, Serialize, Deserialize)]
-pub struct LiveSnapshot {
+/// The scalar part of the live state: what the runtime reports besides the
+/// surface geometry. The viewer forwards it to the page as is (after
+/// [`LiveStatus::sanitized`]), flattened into its state message.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct LiveStatus {
     /// Simulated time (s).
     pub time: f64,
-    /// Current node positions (m), same order as [`LiveMesh::rest`].
-    pub positions: Vec<[f32; 3]>,
-    /// Compression of each node's normal spring, as a fraction of its asymptote `b/a` (0..1).
-    pub compression: Vec<f32>,
     /// Probe face centre (m).
     pub probe_position: [f64; 3],
     /// Probe orientation, unit quaternion (w, x, y, z).
@@ -60,7 +58,7 @@ pub struct LiveSnapshot {
     pub rendered_force: [f64; 3],
     /// The physics' own contact force on the probe (N).
     pub physics_force: [f64; 3],
-    /// Device force limit expressed in tissue units (N), for the gauge.
+    /// Device force limit expressed in tissue units (N), the gauge's full scale.
     pub max_force: f64,
     /// Achieved physics rate (Hz).
     pub physics_rate: f64,
@@ -78,6 +76,72 @@ pub struct LiveSnapshot {
     pub latency_setting: f64,
     /// Whether the scripted exam is playing.
     pub exam_playing: bool,
+}
+
+impl LiveStatus {
+    /// A copy with every non-finite number replaced by 0, so that a front end
+    /// never receives NaN or infinity (JSON has neither).
+    pub fn sanitized(&self) -> LiveStatus {
+        // Destructured without `..` so that a new field must be considered here.
+        let LiveStatus {
+            time,
+            probe_position,
+            probe_orientation,
+            device,
+            proxy,
+            rendered_force,
+            physics_force,
+            max_force,
+            physics_rate,
+            haptic_rate,
+            missed_deadlines,
+            model_age,
+            mode,
+            physics_rate_setting,
+            latency_setting,
+            exam_playing,
+        } = *self;
+        LiveStatus {
+            time: finite(time),
+            probe_position: probe_position.map(finite),
+            probe_orientation: probe_orientation.map(finite),
+            device: device.map(finite),
+            proxy: proxy.map(finite),
+            rendered_force: rendered_force.map(finite),
+            physics_force: physics_force.map(finite),
+            max_force: finite(max_force),
+            physics_rate: finite(physics_rate),
+            haptic_rate: finite(haptic_rate),
+            missed_deadlines,
+            model_age: finite(model_age),
+            mode,
+            physics_rate_setting: finite(physics_rate_setting),
+            latency_setting: finite(latency_setting),
+            exam_playing,
+        }
+    }
+}
+
+/// `x` if finite, else 0.
+fn finite(x: f64) -> f64 {
+    if x.is_finite() {
+        x
+    } else {
+        0.0
+    }
+}
+
+/// Latest state of the live system. Filled in place to avoid allocation: the
+/// runtime reuses the two vectors' capacity and overwrites `status`.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+pub struct LiveSnapshot {
+    /// Current node positions (m), same order as [`LiveMesh::rest`].
+    pub positions: Vec<[f32; 3]>,
+    /// Compression of each node's normal spring, as a fraction of its asymptote `b/a` (0..1).
+    pub compression: Vec<f32>,
+    /// The scalar state (time, probe, forces, rates, settings).
+    #[serde(flatten)]
+    pub status: LiveStatus,
 }
 
 /// A command from a front end. Every numeric field is validated by the runtime.

@@ -6,7 +6,7 @@ use super::run::{default_out, load_scenario, write_run, ModeArg};
 use crate::live::CouplingMode;
 use crate::runtime::client::{run_client, ClientEnd, LoopParts};
 use crate::runtime::deploy::{scripted_device, summarize, RunOutput};
-use crate::runtime::haptic_side::haptic_side;
+use crate::runtime::haptic_side::haptic_side_for;
 use crate::runtime::physics_loop::{physics_loop, Clock, PhysicsEnd};
 use crate::runtime::physics_side::PhysicsSide;
 use crate::runtime::trace::write_physics;
@@ -168,12 +168,7 @@ pub fn client(args: ClientArgs) -> Result<()> {
         welcome.physics_rate
     );
     let device = scripted_device(&scenario)?;
-    let (sink, source) = haptic_side(
-        c.mode,
-        &scenario.haptics,
-        scenario.device.tissue_max_stiffness(),
-    )
-    .map_err(anyhow::Error::msg)?;
+    let (sink, source) = haptic_side_for(c.mode, &scenario)?;
     let parts = LoopParts {
         device,
         source,

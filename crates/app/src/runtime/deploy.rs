@@ -3,7 +3,7 @@
 //! processes `physics-server` / `haptic-client` (see `crate::cmd::net`).
 
 use super::client::{run_client, ClientEnd, LoopParts};
-use super::haptic_side::haptic_side;
+use super::haptic_side::haptic_side_for;
 use super::physics_loop::{physics_loop, Clock, PhysicsReport};
 use super::physics_side::PhysicsSide;
 use super::summary::{median, Summary};
@@ -75,12 +75,7 @@ pub fn run_threads(scenario: &Scenario) -> Result<RunOutput> {
     let c = &scenario.coupling;
     let duration = scenario.run.duration;
     let device = scripted_device(scenario)?;
-    let (sink, source) = haptic_side(
-        c.mode,
-        &scenario.haptics,
-        scenario.device.tissue_max_stiffness(),
-    )
-    .map_err(anyhow::Error::msg)?;
+    let (sink, source) = haptic_side_for(c.mode, scenario)?;
     let scale = scenario.device.force_scale();
     if c.mode == CouplingMode::Direct {
         let physics = PhysicsSide::new(scenario)?;

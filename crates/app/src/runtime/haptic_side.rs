@@ -6,6 +6,7 @@
 //! socket) while the loop never waits.
 
 use crate::live::CouplingMode;
+use crate::scenario::Scenario;
 use echothigh_haptics::{
     handoff, FitReport, HapticRenderer, HapticsConfig, ModelManager, Sample, Vec3,
 };
@@ -96,6 +97,23 @@ pub fn haptic_side(
             fade_time: config.render.fade_time,
         },
     ))
+}
+
+/// Builds the connected pair for `mode` from a scenario's `[haptics]` section,
+/// capping the rendered stiffness at the scenario device's stable stiffness in
+/// tissue units (N/m, `DeviceConfig::tissue_max_stiffness`). Allocates; call
+/// at setup. A haptics configuration the renderer or model manager refuses is
+/// an error naming the parameter.
+pub fn haptic_side_for(
+    mode: CouplingMode,
+    scenario: &Scenario,
+) -> anyhow::Result<(SampleSink, ForceSource)> {
+    haptic_side(
+        mode,
+        &scenario.haptics,
+        scenario.device.tissue_max_stiffness(),
+    )
+    .map_err(anyhow::Error::msg)
 }
 
 impl SampleSink {

@@ -10,7 +10,7 @@
 //! rates or latency, resetting, or playing the scripted exam restarts the
 //! threads from rest with the new settings.
 
-use super::haptic_side::{haptic_side, ForceSource, SampleSink};
+use super::haptic_side::{haptic_side_for, ForceSource, SampleSink};
 use super::physics_loop::{physics_loop_with, Clock};
 use super::physics_side::PhysicsSide;
 use super::section::{section_deformation, SectionScratch};
@@ -249,12 +249,7 @@ fn start_session(
         d.set_state(Vec3::from(target.position), Vec3::zeros());
         d
     };
-    let (sink, source) = haptic_side(
-        c.mode,
-        &scenario.haptics,
-        scenario.device.tissue_max_stiffness(),
-    )
-    .map_err(anyhow::Error::msg)?;
+    let (sink, source) = haptic_side_for(c.mode, scenario)?;
     let seed = scenario.run.seed;
     let (haptic_end, physics_end) = in_process_pair(
         seed,
@@ -474,11 +469,11 @@ impl Publisher {
                     ((rest[i] - anchors[i]).norm() - (x[i] - anchors[i]).norm()) / self.asymptote;
                 snap.compression.push(c.clamp(0.0, 1.0) as f32);
             }
-            snap.time = now;
-            snap.probe_position = probe.position;
-            snap.probe_orientation = probe.orientation;
-            snap.physics_force = sample.force.into();
-            snap.physics_rate = if now > first {
+            snap.status.time = now;
+            snap.status.probe_position = probe.position;
+            snap.status.probe_orientation = probe.orientation;
+            snap.status.physics_force = sample.force.into();
+            snap.status.physics_rate = if now > first {
                 (self.steps - 1) as f64 / (now - first)
             } else {
                 0.0
@@ -570,28 +565,29 @@ impl LiveControl for LiveSystem {
         }
         if let Ok(inner) = self.inner.lock() {
             let c = &inner.scenario.coupling;
-            out.mode = Some(c.mode);
-            out.physics_rate_setting = c.physics_rate;
-            out.latency_setting = inner.scenario.link.latency;
-            out.exam_playing = inner.exam;
-            out.max_force = inner.scenario.device.max_force / inner.scenario.device.force_scale;
+            out.status.mode = Some(c.mode);
+            out.status.physics_rate_setting = c.physics_rate;
+            out.status.latency_setting = inner.scenario.link.latency;
+            out.status.exam_playing = inner.exam;
+            out.status.max_force =
+                inner.scenario.device.max_force / inner.scenario.device.force_scale;
             if c.mode == CouplingMode::Direct {
-                out.physics_rate = c.haptic_rate;
+                out.status.physics_rate = c.haptic_rate;
             }
         }
         if let Ok(mut h) = self.shared.haptic.lock() {
             if let Some(o) = h.as_mut() {
                 let st = *o.read();
-                out.device = st.device;
-                out.proxy = st.proxy;
-                out.rendered_force = st.force;
-                out.model_age = if st.model_age.is_finite() {
+                out.status.device = st.device;
+                out.status.proxy = st.proxy;
+                out.status.rendered_force = st.force;
+                out.status.model_age = if st.model_age.is_finite() {
                     st.model_age
                 } else {
                     -1.0
                 };
-                out.missed_deadlines = st.late;
-                out.haptic_rate = if st.elapsed > 0.0 {
+                out.status.missed_deadlines = st.late;
+                out.status.haptic_rate = if st.elapsed > 0.0 {
                     st.ticks as f64 / st.elapsed
                 } else {
                     0.0

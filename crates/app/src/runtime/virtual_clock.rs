@@ -13,7 +13,7 @@
 //!    fits each), tick the loop: force `f`;
 //! 4. write `f` (times the force scale) to the device and advance it by `T`.
 
-use super::haptic_side::{haptic_side, ForceSource, Rendered, SampleSink};
+use super::haptic_side::{haptic_side_for, ForceSource, Rendered, SampleSink};
 use super::physics_side::PhysicsSide;
 use super::trace::{PhysicsRecord, TickRecord};
 use crate::live::CouplingMode;
@@ -68,12 +68,7 @@ impl VirtualRun {
     pub fn with_device(scenario: &Scenario, device: SimulatedDevice) -> Result<Self> {
         let c = &scenario.coupling;
         let physics = PhysicsSide::new(scenario).context("building the physical model")?;
-        let (sink, source) = haptic_side(
-            c.mode,
-            &scenario.haptics,
-            scenario.device.tissue_max_stiffness(),
-        )
-        .map_err(anyhow::Error::msg)?;
+        let (sink, source) = haptic_side_for(c.mode, scenario)?;
         let seed = scenario.run.seed;
         let up = scenario
             .link

@@ -3,7 +3,9 @@
 //! `F = k₀ d / (1 − d/d_max)` (the shape of the paper's normal spring
 //! `x/(ax + b)`), so the server's tests see forces that rise with the press.
 
-use crate::live::{CouplingMode, LiveCommand, LiveControl, LiveMesh, LiveSnapshot, VeinKind};
+use crate::live::{
+    CouplingMode, LiveCommand, LiveControl, LiveMesh, LiveSnapshot, LiveStatus, VeinKind,
+};
 use std::sync::Mutex;
 
 const N_THETA: usize = 24;
@@ -104,20 +106,25 @@ impl LiveControl for FakeLive {
             0.0
         };
         let n = [theta.sin(), theta.cos(), 0.0];
-        out.time += 0.01;
-        out.probe_position = [SEMI_X * theta.sin(), SEMI_Y * theta.cos(), z0];
-        out.probe_orientation = [1.0, 0.0, 0.0, 0.0];
-        out.device = out.probe_position;
-        out.proxy = out.probe_position;
-        out.rendered_force = n.map(|c| c * f);
-        out.physics_force = n.map(|c| c * f);
-        out.max_force = 30.0;
-        out.physics_rate = i.rate;
-        out.haptic_rate = 1000.0;
-        out.mode = i.mode;
-        out.physics_rate_setting = i.rate;
-        out.latency_setting = i.latency;
-        out.exam_playing = i.playing;
+        let probe = [SEMI_X * theta.sin(), SEMI_Y * theta.cos(), z0];
+        out.status = LiveStatus {
+            time: out.status.time + 0.01,
+            probe_position: probe,
+            probe_orientation: [1.0, 0.0, 0.0, 0.0],
+            device: probe,
+            proxy: probe,
+            rendered_force: n.map(|c| c * f),
+            physics_force: n.map(|c| c * f),
+            max_force: 30.0,
+            physics_rate: i.rate,
+            haptic_rate: 1000.0,
+            missed_deadlines: 0,
+            model_age: 0.0,
+            mode: i.mode,
+            physics_rate_setting: i.rate,
+            latency_setting: i.latency,
+            exam_playing: i.playing,
+        };
     }
 
     fn image(&self, out: &mut Vec<u8>) -> (u32, u32, u64) {

@@ -19,7 +19,7 @@
 //!
 //! Units: SI (m, N, s, Hz), thigh frame (z along the axis, y anterior).
 
-use crate::live::{CouplingMode, LiveCommand, LiveMesh, LiveSnapshot, VeinKind};
+use crate::live::{LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, VeinKind};
 use serde::{Deserialize, Serialize};
 
 /// Version carried by every JSON envelope and binary frame header.
@@ -85,41 +85,14 @@ pub enum ServerMessage {
     },
 }
 
-/// The scalar part of a live state, as the page shows it.
+/// A live state as the page shows it: the runtime's scalar state, flattened
+/// (its fields sit at the top level of the JSON message, next to `vein` and
+/// `exam`).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct ViewState {
-    /// Simulated time (s).
-    pub time: f64,
-    /// Probe face centre (m).
-    pub probe_position: [f64; 3],
-    /// Probe orientation, unit quaternion (w, x, y, z).
-    pub probe_orientation: [f64; 4],
-    /// Device end-effector position (m).
-    pub device: [f64; 3],
-    /// Proxy position (m).
-    pub proxy: [f64; 3],
-    /// Force rendered to the user, tissue units (N).
-    pub rendered_force: [f64; 3],
-    /// The physics' own contact force on the probe (N).
-    pub physics_force: [f64; 3],
-    /// Device force limit in tissue units (N), the gauge's full scale.
-    pub max_force: f64,
-    /// Achieved physics rate (Hz).
-    pub physics_rate: f64,
-    /// Achieved haptic rate (Hz).
-    pub haptic_rate: f64,
-    /// Haptic ticks that missed their deadline since start.
-    pub missed_deadlines: u64,
-    /// Age of the buffer model (s).
-    pub model_age: f64,
-    /// Coupling mode.
-    pub mode: Option<CouplingMode>,
-    /// Configured physics rate (Hz).
-    pub physics_rate_setting: f64,
-    /// Added one-way link latency (s).
-    pub latency_setting: f64,
-    /// Whether the scripted exam is playing.
-    pub exam_playing: bool,
+    /// Time, probe, forces, rates and settings, with every number finite.
+    #[serde(flatten)]
+    pub status: LiveStatus,
     /// Vein state; `None` while an exam question hides it.
     pub vein: Option<VeinKind>,
     /// Exam session.
@@ -127,38 +100,15 @@ pub struct ViewState {
 }
 
 impl ViewState {
-    /// Copies the scalar fields of `snap` (a non-finite value becomes 0, so
-    /// the page never sees NaN); `vein` and `exam` come from the server.
+    /// The scalar state of `snap`, sanitized ([`LiveStatus::sanitized`]: a
+    /// non-finite value becomes 0, so the page never sees NaN); `vein` and
+    /// `exam` come from the server.
     pub fn from_snapshot(snap: &LiveSnapshot, vein: Option<VeinKind>, exam: ExamStatus) -> Self {
         Self {
-            time: finite(snap.time),
-            probe_position: snap.probe_position.map(finite),
-            probe_orientation: snap.probe_orientation.map(finite),
-            device: snap.device.map(finite),
-            proxy: snap.proxy.map(finite),
-            rendered_force: snap.rendered_force.map(finite),
-            physics_force: snap.physics_force.map(finite),
-            max_force: finite(snap.max_force),
-            physics_rate: finite(snap.physics_rate),
-            haptic_rate: finite(snap.haptic_rate),
-            missed_deadlines: snap.missed_deadlines,
-            model_age: finite(snap.model_age),
-            mode: snap.mode,
-            physics_rate_setting: finite(snap.physics_rate_setting),
-            latency_setting: finite(snap.latency_setting),
-            exam_playing: snap.exam_playing,
+            status: snap.status.sanitized(),
             vein,
             exam,
         }
-    }
-}
-
-/// `x` if finite, else 0.
-fn finite(x: f64) -> f64 {
-    if x.is_finite() {
-        x
-    } else {
-        0.0
     }
 }
 

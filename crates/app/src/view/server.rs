@@ -90,7 +90,7 @@ impl AppState {
 
     /// Builds the state message from `snap`, recording the force for the exam.
     fn view_state(&self, snap: &LiveSnapshot) -> ViewState {
-        let [x, y, z] = snap.physics_force;
+        let [x, y, z] = snap.status.physics_force;
         let mut exam = self.exam();
         exam.observe_force((x * x + y * y + z * z).sqrt());
         let vein = (!exam.is_open()).then(|| self.control.vein());

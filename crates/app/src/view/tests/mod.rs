@@ -1,5 +1,7 @@
 //! Tests of the viewer: the protocol (encoding, decoding, refusal of bad
-//! page messages) and the server end to end over a real WebSocket.
+//! page messages), the state message's JSON as the page reads it, and the
+//! server end to end over a real WebSocket.
 
 mod protocol;
 mod server;
+mod state_json;

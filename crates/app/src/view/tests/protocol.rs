@@ -2,11 +2,12 @@
 //! page messages are refused with an error naming the problem, never a panic.
 
 use super::super::protocol::*;
-use crate::live::{CouplingMode, LiveCommand, LiveMesh, LiveSnapshot, VeinKind};
+use crate::live::{CouplingMode, LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, VeinKind};
 use proptest::prelude::*;
 
-fn sample_state() -> ViewState {
-    let snap = LiveSnapshot {
+/// A state with every field set, an answered exam question and a visible vein.
+pub(super) fn sample_state() -> ViewState {
+    let status = LiveStatus {
         time: 1.25,
         probe_position: [0.0, 0.07, 0.01],
         probe_orientation: [1.0, 0.0, 0.0, 0.0],
@@ -21,6 +22,10 @@ fn sample_state() -> ViewState {
         physics_rate_setting: 100.0,
         latency_setting: 0.02,
         exam_playing: true,
+        ..Default::default()
+    };
+    let snap = LiveSnapshot {
+        status,
         ..Default::default()
     };
     let exam = ExamStatus {
@@ -87,17 +92,22 @@ fn hello_and_error_round_trip() {
 #[test]
 fn non_finite_snapshot_values_never_reach_the_page() {
     let snap = LiveSnapshot {
-        time: f64::NAN,
-        rendered_force: [f64::INFINITY, 1.0, f64::NAN],
-        model_age: f64::NEG_INFINITY,
+        status: LiveStatus {
+            time: f64::NAN,
+            rendered_force: [f64::INFINITY, 1.0, f64::NAN],
+            model_age: f64::NEG_INFINITY,
+            missed_deadlines: 7,
+            ..Default::default()
+        },
         ..Default::default()
     };
-    let s = ViewState::from_snapshot(&snap, None, ExamStatus::default());
+    let state = ViewState::from_snapshot(&snap, None, ExamStatus::default());
+    let s = state.status;
     assert_eq!(
-        (s.time, s.rendered_force, s.model_age),
-        (0.0, [0.0, 1.0, 0.0], 0.0)
+        (s.time, s.rendered_force, s.model_age, s.missed_deadlines),
+        (0.0, [0.0, 1.0, 0.0], 0.0, 7)
     );
-    let value = serde_json::to_value(Envelope::new(ServerMessage::State(s))).unwrap();
+    let value = serde_json::to_value(Envelope::new(ServerMessage::State(state))).unwrap();
     for key in ["time", "model_age", "max_force"] {
         assert!(value[key].is_f64(), "{key}: {value}");
     }
@@ -106,6 +116,49 @@ fn non_finite_snapshot_values_never_reach_the_page() {
         .unwrap()
         .iter()
         .all(|c| c.is_f64()));
+}
+
+#[test]
+fn sanitized_zeroes_every_non_finite_number_and_keeps_the_rest() {
+    let bad = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY];
+    let status = LiveStatus {
+        time: f64::NAN,
+        probe_position: bad,
+        probe_orientation: [1.0, f64::NAN, 0.5, f64::INFINITY],
+        device: bad,
+        proxy: [0.1, f64::NAN, 0.2],
+        rendered_force: bad,
+        physics_force: [f64::NEG_INFINITY, 3.0, 0.0],
+        max_force: f64::INFINITY,
+        physics_rate: f64::NAN,
+        haptic_rate: 999.0,
+        missed_deadlines: 11,
+        model_age: f64::NEG_INFINITY,
+        mode: Some(CouplingMode::Direct),
+        physics_rate_setting: f64::NAN,
+        latency_setting: f64::INFINITY,
+        exam_playing: true,
+    };
+    let expected = LiveStatus {
+        time: 0.0,
+        probe_position: [0.0; 3],
+        probe_orientation: [1.0, 0.0, 0.5, 0.0],
+        device: [0.0; 3],
+        proxy: [0.1, 0.0, 0.2],
+        rendered_force: [0.0; 3],
+        physics_force: [0.0, 3.0, 0.0],
+        max_force: 0.0,
+        physics_rate: 0.0,
+        haptic_rate: 999.0,
+        missed_deadlines: 11,
+        model_age: 0.0,
+        mode: Some(CouplingMode::Direct),
+        physics_rate_setting: 0.0,
+        latency_setting: 0.0,
+        exam_playing: true,
+    };
+    assert_eq!(status.sanitized(), expected);
+    assert_eq!(expected.sanitized(), expected, "finite values must be kept");
 }
 
 #[test]

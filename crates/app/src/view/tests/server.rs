@@ -145,8 +145,8 @@ async fn bad_messages_get_errors_and_the_connection_stays_up() {
         r#"{"type":"probe","theta":0.2,"z":0.01,"depth":0.015,"tilt":0}"#,
     )
     .await;
-    let s = next_state(&mut ws, |s| norm(s.physics_force) > 1.0).await;
-    assert!(norm(s.rendered_force) > 1.0);
+    let s = next_state(&mut ws, |s| norm(s.status.physics_force) > 1.0).await;
+    assert!(norm(s.status.rendered_force) > 1.0);
     let live: Vec<_> = fake
         .commands()
         .into_iter()
@@ -167,10 +167,13 @@ async fn controls_reach_the_runtime() {
     send(&mut ws, r#"{"type":"set_mode","mode":"direct"}"#).await;
     send(&mut ws, r#"{"type":"set_physics_rate","hz":50}"#).await;
     send(&mut ws, r#"{"type":"set_latency","seconds":0.04}"#).await;
-    let s = next_state(&mut ws, |s| s.latency_setting > 0.0).await;
+    let s = next_state(&mut ws, |s| s.status.latency_setting > 0.0).await;
     assert_eq!(s.vein, Some(VeinKind::Chronic));
-    assert_eq!(s.mode, Some(crate::live::CouplingMode::Direct));
-    assert_eq!((s.physics_rate_setting, s.latency_setting), (50.0, 0.04));
+    assert_eq!(s.status.mode, Some(crate::live::CouplingMode::Direct));
+    assert_eq!(
+        (s.status.physics_rate_setting, s.status.latency_setting),
+        (50.0, 0.04)
+    );
 }
 
 #[tokio::test]
