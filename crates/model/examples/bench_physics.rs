@@ -1,6 +1,6 @@
 //! Physics step benchmark of this crate alone (builds only the model's
 //! dependencies): `cargo run --release -p echothigh-model --example
-//! bench_physics [max_nodes]` prints the JSON report on stdout and a table on
+//! bench_physics [max_nodes] [min_nodes]` prints the JSON report on stdout and a table on
 //! stderr. `echothigh bench physics` runs the same cases.
 
 use echothigh_model::bench::{run_case, Scenario, SIZES};
@@ -10,8 +10,15 @@ fn main() {
         .nth(1)
         .and_then(|a| a.parse().ok())
         .unwrap_or(usize::MAX);
+    let min_nodes: usize = std::env::args()
+        .nth(2)
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(0);
     let mut reports = Vec::new();
-    for &(nt, nz, steps) in SIZES.iter().filter(|(nt, nz, _)| nt * nz <= max_nodes) {
+    for &(nt, nz, steps) in SIZES
+        .iter()
+        .filter(|(nt, nz, _)| (min_nodes..=max_nodes).contains(&(nt * nz)))
+    {
         for scenario in Scenario::ALL {
             match run_case(scenario, nt, nz, steps, 3) {
                 Ok(r) => {
