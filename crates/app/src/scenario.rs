@@ -42,12 +42,19 @@ pub struct PatientConfig {
     /// State of the femoral vein: `healthy` (compressible), `acute` (fresh
     /// thrombus) or `chronic` (organised thrombus). Default `healthy`.
     pub vein: VeinState,
+    /// Angle θ around the thigh (rad, `[thigh]`'s convention: π/2 is the
+    /// anterior line) of the skin line above the femoral vessels: the image
+    /// shows `[imaging.anatomy]` as configured when the probe is centred
+    /// there, and pans it as the probe slides around the thigh. Default π/2
+    /// (the default exam site).
+    pub vessel_angle: f64,
 }
 
 impl Default for PatientConfig {
     fn default() -> Self {
         Self {
             vein: VeinState::Healthy,
+            vessel_angle: std::f64::consts::FRAC_PI_2,
         }
     }
 }
@@ -133,6 +140,10 @@ impl Scenario {
         self.imaging
             .validate("imaging")
             .map_err(anyhow::Error::msg)?;
+        let a = self.patient.vessel_angle;
+        if !a.is_finite() || a.abs() > 4.0 * std::f64::consts::PI {
+            bail!("patient.vessel_angle must be a finite angle in [-4π, 4π] rad, got {a}");
+        }
         let d = self.run.duration;
         if !d.is_finite() || d <= 0.0 || d > 3600.0 {
             bail!("run.duration must be in (0, 3600] s, got {d}");

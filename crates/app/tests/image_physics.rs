@@ -39,6 +39,7 @@ fn physics_press_collapses_only_the_healthy_vein() {
         deformation: &press.deformation,
         probe_pressure: press.force / cfg.probe_area(),
         time: 0.0,
+        lateral_offset: 0.0,
     };
     let ratio = |state| {
         let r = Renderer::new(&cfg, state).unwrap();

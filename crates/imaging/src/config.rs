@@ -67,6 +67,14 @@ pub struct ImagingConfig {
     /// Elevation (thickness) of the probe face across the image plane (m),
     /// for the pressure under the face (must match `[probe]`). Default 0.010.
     pub probe_elevation: f64,
+    /// How far the image can pan laterally, each way (m): the anatomy is
+    /// fixed in the thigh, the image centred on the probe, so sliding the
+    /// probe across the thigh by `s` (arc length along the skin) moves the
+    /// anatomy by `−s` in the image (see [`crate::FrameInput::lateral_offset`]).
+    /// The scatterer field is prepared over `width + 2 · pan_range`; a probe
+    /// farther than this from the vessels sees the field's edge (fat, muscle,
+    /// no vessel). Default 0.050.
+    pub pan_range: f64,
     /// The anatomy of the section (`[imaging.anatomy]`).
     pub anatomy: AnatomyConfig,
 }
@@ -90,6 +98,7 @@ impl Default for ImagingConfig {
             max_indentation: 0.030,
             probe_width: 0.040,
             probe_elevation: 0.010,
+            pan_range: 0.050,
             anatomy: AnatomyConfig::default(),
         }
     }
@@ -158,7 +167,16 @@ impl ImagingConfig {
         ImagingError::non_negative(prefix, "max_indentation", self.max_indentation)?;
         ImagingError::positive(prefix, "probe_width", self.probe_width)?;
         ImagingError::positive(prefix, "probe_elevation", self.probe_elevation)?;
-        let area = (self.width + 0.01) * (self.depth + self.max_indentation + 0.01);
+        ImagingError::in_range(
+            prefix,
+            "pan_range",
+            self.pan_range,
+            0.0,
+            1.0,
+            "must be between 0 and 1 m",
+        )?;
+        let area =
+            (self.width + 2.0 * self.pan_range + 0.01) * (self.depth + self.max_indentation + 0.01);
         if self.scatterer_density * area > Self::MAX_SCATTERERS {
             return Err(ImagingError::invalid(
                 prefix,
@@ -178,6 +196,12 @@ impl ImagingConfig {
     /// Axial pixel pitch (m).
     pub fn pixel_depth(&self) -> f64 {
         self.depth / self.rows as f64
+    }
+
+    /// The largest pan, in whole columns (the pan is quantized to the
+    /// lateral pixel pitch, so that scatterers stay on their columns).
+    pub fn pan_columns(&self) -> usize {
+        (self.pan_range / self.pixel_width()).floor() as usize
     }
 
     /// Area of the probe face (m²): `probe_width · probe_elevation`.

@@ -21,7 +21,7 @@
 //! let mut r = Renderer::new(&cfg, VeinState::Healthy).unwrap();
 //! let bone = r.anatomy().unwrap().femur_top();
 //! let press = SectionDeformation::flat_press(0.005, 0.04, 1.5e-3, bone).unwrap();
-//! let input = FrameInput { deformation: &press, probe_pressure: 5.0 / 4e-4, time: 0.0 };
+//! let input = FrameInput { deformation: &press, probe_pressure: 5.0 / 4e-4, time: 0.0, lateral_offset: 0.0 };
 //! let mut frame = vec![0u8; 64 * 160];
 //! r.render_into(&input, &mut frame).unwrap();
 //! ```

@@ -33,6 +33,13 @@ pub struct FrameInput<'a> {
     pub probe_pressure: f64,
     /// Time (s), for the arterial pulse.
     pub time: f64,
+    /// Lateral position of the image centre in the anatomy's frame (m): the
+    /// arc length along the skin from the vessels' reference line (the exam
+    /// site) to the probe, along the image's lateral axis. 0 puts the
+    /// anatomy as configured; `s` moves it by `−s` in the image. Quantized
+    /// to the lateral pixel pitch and clamped to `±imaging.pan_range`
+    /// ([`Renderer::pan`]).
+    pub lateral_offset: f64,
 }
 
 /// The state of one vessel's lumen in a frame.
@@ -87,7 +94,10 @@ pub struct Renderer {
     lc: LogCompression,
     padded_rows: usize,
     pad: usize,
+    /// Lateral centre of each window bin (m, image frame).
     bin_u: Vec<f64>,
+    /// The current pan, in columns (see [`Renderer::pan`]).
+    pan: isize,
     surface: Vec<f64>,
     warps: Vec<[VesselWarp; 2]>,
     rf: Vec<[f32; 2]>,
@@ -133,7 +143,7 @@ impl Renderer {
         let tables = PsfTables::new(cfg);
         let pad = 2 * tables.axial_half;
         let padded_rows = cfg.rows + 2 * pad;
-        let bins = field.bin_count();
+        let bins = cfg.columns + 2 * field.halo;
         let dx = cfg.pixel_width();
         let bin_u = (0..bins)
             .map(|b| -0.5 * cfg.width + (b as f64 - field.halo as f64 + 0.5) * dx)
@@ -162,6 +172,7 @@ impl Renderer {
             padded_rows,
             pad,
             bin_u,
+            pan: 0,
             surface: vec![0.0; bins],
             warps: vec![[VesselWarp::default(); 2]; bins],
             rf: vec![[0.0; 2]; bins * padded_rows],
@@ -191,9 +202,30 @@ impl Renderer {
         (self.cfg.columns, self.cfg.rows)
     }
 
-    /// Lateral position (m) of the centre of image column `j`.
+    /// Lateral position (m) of the centre of image column `j` (image frame).
     pub fn column_lateral(&self, j: usize) -> f64 {
         self.bin_u[j + self.field.halo]
+    }
+
+    /// The pan applied for a lateral offset (m): quantized to whole columns
+    /// and clamped to `±pan_range` (m, the anatomy's frame). Returns the pan
+    /// in m and in columns.
+    pub fn pan(&self, lateral_offset: f64) -> (f64, isize) {
+        let dx = self.cfg.pixel_width();
+        let max = self.field.pan as isize;
+        let p = if lateral_offset.is_finite() {
+            ((lateral_offset / dx)
+                .round()
+                .clamp(-(max as f64), max as f64)) as isize
+        } else {
+            0
+        };
+        (p as f64 * dx, p)
+    }
+
+    /// First field bin of the window at pan `p` columns.
+    fn window_start(&self, p: isize) -> usize {
+        (self.field.pan as isize + p) as usize
     }
 
     fn lumen_of(
@@ -204,13 +236,15 @@ impl Renderer {
         ratio_of: impl Fn(f64) -> f64,
     ) -> Lumen {
         let def = input.deformation;
-        let s = def.surface_at(v.lateral);
+        // The vessel in the image's frame.
+        let lateral = v.lateral - self.pan(input.lateral_offset).0;
+        let s = def.surface_at(lateral);
         let centre = column_depth(s, def.bone_depth, v.depth) - face;
         let p = stress_under_rectangle(
             input.probe_pressure.max(0.0),
             self.cfg.probe_width,
             self.cfg.probe_elevation,
-            v.lateral,
+            lateral,
             0.0,
             centre.max(0.0),
         );
@@ -222,7 +256,7 @@ impl Renderer {
             area: ratio * v.rest_area(),
             rest_area: v.rest_area(),
             tissue_pressure: p,
-            lateral: v.lateral,
+            lateral,
             depth: 0.5 * (top + bottom),
             half_height: 0.5 * (bottom - top),
             half_width: v.radius,
@@ -253,15 +287,18 @@ impl Renderer {
         let face = def.face_depth(0.5 * self.cfg.width);
         self.geometry.face = face;
         self.geometry.bone = def.bone_depth;
+        let (pan_m, pan) = self.pan(input.lateral_offset);
+        self.pan = pan;
         let ratios = self.lumens(input)?.map(|r| {
             (
                 r.vein.area / r.vein.rest_area,
                 r.artery.area / r.artery.rest_area,
             )
         });
-        for (b, &u) in self.bin_u.iter().enumerate() {
-            let s = def.surface_at(u);
+        for (b, &u_image) in self.bin_u.iter().enumerate() {
+            let s = def.surface_at(u_image);
             self.surface[b] = s;
+            let u = u_image + pan_m;
             self.warps[b] = match (ratios, &self.anatomy) {
                 (Some((rv, ra)), Some(a)) => [
                     VesselWarp::new(a.vein(), u, compensated_ratio(rv, s, def.bone_depth)),
@@ -279,8 +316,9 @@ impl Renderer {
         self.check_out(out)?;
         self.prepare(input)?;
         let (t, g, f, pr) = (&self.tables, &self.geometry, &self.field, self.padded_rows);
+        let w0 = self.window_start(self.pan);
         for (b, col) in self.rf.chunks_mut(pr).enumerate() {
-            let r = f.bin_start[b] as usize..f.bin_start[b + 1] as usize;
+            let r = f.bin_start[w0 + b] as usize..f.bin_start[w0 + b + 1] as usize;
             splat_column(
                 t,
                 g,
@@ -296,6 +334,7 @@ impl Renderer {
             convolve_column(t, &self.rf, pr, self.pad, j, col);
         }
         let h = f.halo;
+        let pan_m = self.pan as f64 * self.cfg.pixel_width();
         for (j, (col, iq)) in self
             .gray
             .chunks_mut(rows)
@@ -307,7 +346,7 @@ impl Renderer {
                 &self.lc,
                 g,
                 self.anatomy.as_ref(),
-                self.bin_u[b],
+                self.bin_u[b] + pan_m,
                 self.surface[b],
                 &self.warps[b],
                 iq,
@@ -334,8 +373,10 @@ impl Renderer {
         self.prepare(input)?;
         let (t, g, f, pr) = (&self.tables, &self.geometry, &self.field, self.padded_rows);
         let (surface, warps) = (&self.surface, &self.warps);
+        let w0 = self.window_start(self.pan);
+        let pan_m = self.pan as f64 * self.cfg.pixel_width();
         self.rf.par_chunks_mut(pr).enumerate().for_each(|(b, col)| {
-            let r = f.bin_start[b] as usize..f.bin_start[b + 1] as usize;
+            let r = f.bin_start[w0 + b] as usize..f.bin_start[w0 + b + 1] as usize;
             splat_column(
                 t,
                 g,
@@ -359,7 +400,16 @@ impl Renderer {
             .enumerate()
             .for_each(|(j, (col, iq))| {
                 let b = j + h;
-                compress_column(lc, g, anatomy, bin_u[b], surface[b], &warps[b], iq, col);
+                compress_column(
+                    lc,
+                    g,
+                    anatomy,
+                    bin_u[b] + pan_m,
+                    surface[b],
+                    &warps[b],
+                    iq,
+                    col,
+                );
             });
         let (cols, gray) = (self.cfg.columns, &self.gray);
         out.par_chunks_mut(cols).enumerate().for_each(|(i, row)| {
@@ -407,6 +457,12 @@ fn check_input(input: &FrameInput) -> Result<(), ImagingError> {
     if !input.time.is_finite() {
         return Err(ImagingError::Input {
             field: "time",
+            reason: "must be finite",
+        });
+    }
+    if !input.lateral_offset.is_finite() {
+        return Err(ImagingError::Input {
+            field: "lateral_offset",
             reason: "must be finite",
         });
     }

@@ -1,8 +1,10 @@
 //! Scatterers fixed in tissue (material) coordinates, binned by image column.
 //!
 //! Each column of the image (plus a halo of `⌈3 σ_x / Δx⌉` columns on each
-//! side, so that the lateral PSF is complete at the edges) owns a Poisson
-//! number of scatterers with uniform depths, sorted by depth. A scatterer
+//! side, so that the lateral PSF is complete at the edges, plus
+//! `pan_range / Δx` columns on each side, where the image window can pan
+//! to) owns a Poisson number of scatterers with uniform depths, sorted by
+//! depth. A scatterer
 //! carries a circular complex Gaussian amplitude whose power is the mean
 //! backscatter of its tissue (dB relative to muscle), modulated along
 //! connective-tissue lines: septa in the fat, perimysium in the muscle.
@@ -22,7 +24,11 @@ use rand_distr::{Distribution, Poisson, StandardNormal};
 pub(crate) struct ScattererField {
     /// Halo columns on each side of the image.
     pub halo: usize,
-    /// `bin_start[b]..bin_start[b + 1]`: scatterers of bin `b` (image column `b − halo`).
+    /// Pan columns on each side of the halo: the window of the image at pan
+    /// `p` columns (`|p| ≤ pan`) is bins `pan + p .. pan + p + columns + 2 halo`.
+    pub pan: usize,
+    /// `bin_start[b]..bin_start[b + 1]`: scatterers of bin `b` (image column
+    /// `b − halo − pan` at zero pan).
     pub bin_start: Vec<u32>,
     /// Depth below the undeformed skin (m), increasing within a bin.
     pub depth: Vec<f32>,
@@ -79,12 +85,20 @@ fn lines(
 }
 
 impl ScattererField {
-    /// Lateral geometry of `cfg`: (halo, bins, centre of bin 0 in m).
-    fn bins(cfg: &ImagingConfig) -> (usize, usize, f64) {
+    /// Halo columns of `cfg` on each side of the image.
+    pub fn halo(cfg: &ImagingConfig) -> usize {
+        ((3.0 * cfg.lateral_fwhm / FWHM_PER_SIGMA / cfg.pixel_width()).ceil() as usize).max(1)
+    }
+
+    /// Lateral geometry of `cfg`: (halo, pan, bins, centre of bin 0 in m,
+    /// anatomy frame).
+    fn bins(cfg: &ImagingConfig) -> (usize, usize, usize, f64) {
         let dx = cfg.pixel_width();
-        let halo = ((3.0 * cfg.lateral_fwhm / FWHM_PER_SIGMA / dx).ceil() as usize).max(1);
-        let bins = cfg.columns + 2 * halo;
-        (halo, bins, -0.5 * cfg.width + (0.5 - halo as f64) * dx)
+        let halo = Self::halo(cfg);
+        let pan = cfg.pan_columns();
+        let bins = cfg.columns + 2 * halo + 2 * pan;
+        let u_first = -0.5 * cfg.width + (0.5 - halo as f64 - pan as f64) * dx;
+        (halo, pan, bins, u_first)
     }
 
     /// Deepest populated tissue depth (m).
@@ -100,7 +114,7 @@ impl ScattererField {
         rng: &mut ChaCha8Rng,
         mut amplitude: impl FnMut(f64, f64) -> Option<f64>,
     ) -> Self {
-        let (halo, bins, u_first) = Self::bins(cfg);
+        let (halo, pan, bins, u_first) = Self::bins(cfg);
         let dx = cfg.pixel_width();
         let dmax = Self::max_depth(cfg);
         // A non-positive or non-finite rate leaves the field empty.
@@ -133,6 +147,7 @@ impl ScattererField {
         bin_start.push(depth.len() as u32);
         ScattererField {
             halo,
+            pan,
             bin_start,
             depth,
             amp,
@@ -143,7 +158,7 @@ impl ScattererField {
     pub fn from_anatomy(cfg: &ImagingConfig, anatomy: &Anatomy) -> Self {
         let a = anatomy.config();
         let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
-        let half = 0.5 * cfg.width + 2e-3;
+        let half = 0.5 * cfg.width + cfg.pan_columns() as f64 * cfg.pixel_width() + 2e-3;
         let fat = (
             a.skin_thickness + 0.3e-3,
             a.skin_thickness + a.fat_thickness - 0.3e-3,
@@ -212,10 +227,12 @@ impl ScattererField {
         Self::generate(cfg, density, &mut rng, |_, _| Some(1.0))
     }
 
-    /// Unit point scatterers at `(column, depth)` (image column index, depth in m).
+    /// Unit point scatterers at `(column, depth)` (image column index at
+    /// zero pan, depth in m).
     pub fn points(cfg: &ImagingConfig, points: &[(usize, f64)]) -> Self {
-        let (halo, bins, _) = Self::bins(cfg);
-        let mut sorted: Vec<(usize, f64)> = points.iter().map(|&(c, d)| (c + halo, d)).collect();
+        let (halo, pan, bins, _) = Self::bins(cfg);
+        let mut sorted: Vec<(usize, f64)> =
+            points.iter().map(|&(c, d)| (c + halo + pan, d)).collect();
         sorted.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
         let mut bin_start = Vec::with_capacity(bins + 1);
         let mut depth = Vec::new();
@@ -232,15 +249,11 @@ impl ScattererField {
         bin_start.push(depth.len() as u32);
         ScattererField {
             halo,
+            pan,
             bin_start,
             depth,
             amp,
         }
-    }
-
-    /// Number of bins (image columns plus halos).
-    pub fn bin_count(&self) -> usize {
-        self.bin_start.len() - 1
     }
 
     /// Number of scatterers.

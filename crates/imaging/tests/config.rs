@@ -127,6 +127,7 @@ fn bad_values_name_their_key() {
         deformation: &d,
         probe_pressure: 0.0,
         time: 0.0,
+        lateral_offset: 0.0,
     };
     assert!(r
         .render_into(&input, &mut out)
@@ -137,6 +138,7 @@ fn bad_values_name_their_key() {
         deformation: &d,
         probe_pressure: f64::NAN,
         time: 0.0,
+        lateral_offset: 0.0,
     };
     assert!(r
         .render(&bad)

@@ -19,6 +19,7 @@ fn model_lumen_area_versus_force() {
                 deformation: &d,
                 probe_pressure: f / cfg.probe_area(),
                 time: 0.0,
+                lateral_offset: 0.0,
             };
             let l = r.lumens(&input).unwrap().unwrap();
             let vein = l.vein.area / l.vein.rest_area;

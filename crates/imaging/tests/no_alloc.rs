@@ -25,6 +25,7 @@ fn render_into_does_not_allocate() {
                 deformation: d,
                 probe_pressure: k as f64 * 5000.0,
                 time: k as f64 * 0.1,
+                lateral_offset: 0.0,
             };
             r.render_into(&input, &mut out).unwrap();
             r.lumens(&input).unwrap();

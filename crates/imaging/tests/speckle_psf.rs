@@ -8,6 +8,7 @@ fn rest_input(d: &SectionDeformation) -> FrameInput<'_> {
         deformation: d,
         probe_pressure: 0.0,
         time: 0.0,
+        lateral_offset: 0.0,
     }
 }
 

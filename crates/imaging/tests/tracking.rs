@@ -10,6 +10,7 @@ fn frame_at(r: &mut Renderer, indentation_m: f64) -> Vec<u8> {
         deformation: &d,
         probe_pressure: 0.0,
         time: 0.0,
+        lateral_offset: 0.0,
     };
     r.render(&input).unwrap()
 }
@@ -99,6 +100,7 @@ fn deterministic_for_a_seed() {
         deformation: &d,
         probe_pressure: 0.0,
         time: 0.0,
+        lateral_offset: 0.0,
     };
     let mut fp = vec![0; 96 * 160];
     b.render_into_parallel(&input, &mut fp).unwrap();

@@ -66,6 +66,7 @@ fn run_mode(
             deformation: d,
             probe_pressure: force / r.config().probe_area(),
             time: k as f64 / 60.0,
+            lateral_offset: 0.0,
         };
         let t0 = Instant::now();
         if parallel {

@@ -12,7 +12,7 @@ use crate::runtime::section::{press_to_force, StaticPress};
 use crate::scenario::Scenario;
 use anyhow::{Context, Result};
 use echothigh_imaging::{
-    contact_sheet, write_gray_png, FrameInput, ImagingConfig, Renderer, VeinState,
+    contact_sheet, write_gray_png, Anatomy, FrameInput, ImagingConfig, Renderer, VeinState,
 };
 use std::path::{Path, PathBuf};
 
@@ -34,6 +34,12 @@ pub struct Args {
     /// Time (s), for the arterial pulse.
     #[arg(long, default_value_t = 0.0)]
     pub time: f64,
+    /// Distance (m) along the skin from the vessels' line to the probe,
+    /// positive along the image's lateral axis: the anatomy pans by minus
+    /// this in the image (clamped to `imaging.pan_range`). The press itself
+    /// stays at the exam site (the thigh is laterally uniform there).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub lateral: f64,
     /// Render every vein state at each of --forces, plus a contact sheet.
     #[arg(long)]
     pub sweep: bool,
@@ -67,11 +73,13 @@ fn render_at(
     press: &StaticPress,
     face_area: f64,
     time: f64,
+    lateral: f64,
 ) -> Result<(Vec<u8>, f64, f64)> {
     let input = FrameInput {
         deformation: &press.deformation,
         probe_pressure: press.force / face_area,
         time,
+        lateral_offset: lateral,
     };
     let frame = renderer.render(&input)?;
     let l = renderer
@@ -110,14 +118,16 @@ pub fn run(args: Args) -> Result<()> {
     let scenario = load_scenario(&args)?;
     let cfg = scenario.imaging_config();
     let face_area = cfg.probe_area();
-    let bone = Renderer::new(&cfg, VeinState::Healthy)?
-        .anatomy()
-        .map(|a| a.femur_top())
-        .context("no anatomy")?;
+    anyhow::ensure!(
+        args.lateral.is_finite(),
+        "--lateral must be a finite distance in m, got {}",
+        args.lateral
+    );
+    let bone = Anatomy::new(&cfg.anatomy, VeinState::Healthy)?.femur_top();
     if !args.sweep {
         let press = presses(&scenario, &[args.force], bone)?.remove(0);
         let mut r = Renderer::new(&cfg, args.vein)?;
-        let (frame, vein, artery) = render_at(&mut r, &press, face_area, args.time)?;
+        let (frame, vein, artery) = render_at(&mut r, &press, face_area, args.time, args.lateral)?;
         write(&args.out, &cfg, &frame)?;
         println!(
             "{}: {} vein at {:.1} N (indentation {:.1} mm): vein lumen {:.0} % of rest, artery {:.0} %",
@@ -139,7 +149,8 @@ pub fn run(args: Args) -> Result<()> {
     for state in VeinState::ALL {
         let mut r = Renderer::new(&cfg, state)?;
         for (press, &force) in pressed.iter().zip(&args.forces) {
-            let (frame, vein, artery) = render_at(&mut r, press, face_area, args.time)?;
+            let (frame, vein, artery) =
+                render_at(&mut r, press, face_area, args.time, args.lateral)?;
             let path = args
                 .out
                 .join(format!("{}_{:04.1}N.png", state.name(), force));

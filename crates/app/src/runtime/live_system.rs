@@ -13,13 +13,14 @@
 use super::haptic_side::{haptic_side_for, ForceSource, SampleSink};
 use super::physics_loop::{physics_loop_with, Clock};
 use super::physics_side::PhysicsSide;
-use super::section::{section_deformation, SectionScratch};
+use super::section::{lateral_offset, section_deformation, SectionScratch};
 use crate::live::{CouplingMode, LiveCommand, LiveControl, LiveMesh, LiveSnapshot, VeinKind};
 use crate::scenario::Scenario;
 use anyhow::{Context, Result};
 use echothigh_device::{ExamScript, HapticDevice, SimulatedDevice, SimulatedHand};
 use echothigh_haptics::{LoopRunner, Vec3};
-use echothigh_imaging::{FrameInput, Renderer, SectionDeformation, VeinState};
+use echothigh_imaging::{Anatomy, FrameInput, Renderer, SectionDeformation, VeinState};
+use echothigh_model::ThighGeometry;
 use echothigh_transport::{in_process_pair, InProcessEndpoint, Link, Message, ProbeMsg};
 use nalgebra::{Isometry3, UnitQuaternion, Vector3};
 use std::sync::atomic::{AtomicBool, AtomicU8, Ordering};
@@ -53,6 +54,8 @@ struct ImageInput {
     deformation: SectionDeformation,
     pressure: f64,
     time: f64,
+    /// Where the probe is relative to the vessels (m, along the skin).
+    lateral_offset: f64,
 }
 
 struct ImageSlot {
@@ -153,6 +156,7 @@ impl LiveSystem {
                 deformation: SectionDeformation::rest(0.04),
                 pressure: 0.0,
                 time: 0.0,
+                lateral_offset: 0.0,
             }),
             image: Mutex::new(ImageSlot {
                 pixels: vec![0; img.columns * img.rows],
@@ -425,6 +429,8 @@ struct Publisher {
     face_area: f64,
     asymptote: f64,
     bone_depth: f64,
+    thigh: ThighGeometry,
+    vessel_angle: f64,
     steps: u64,
     first: Option<f64>,
 }
@@ -432,9 +438,8 @@ struct Publisher {
 impl Publisher {
     fn new(shared: Arc<Shared>, s: &Scenario) -> Self {
         let img = s.imaging_config();
-        let bone_depth = Renderer::new(&img, VeinState::Healthy)
-            .ok()
-            .and_then(|r| r.anatomy().map(|a| a.femur_top()))
+        let bone_depth = Anatomy::new(&img.anatomy, VeinState::Healthy)
+            .map(|a| a.femur_top())
             .unwrap_or(0.04);
         Publisher {
             shared,
@@ -445,6 +450,8 @@ impl Publisher {
             face_area: 4.0 * s.probe.half_width * s.probe.half_elevation,
             asymptote: s.tissue.asymptote(),
             bone_depth,
+            thigh: s.thigh.clone(),
+            vessel_angle: s.patient.vessel_angle,
             steps: 0,
             first: None,
         }
@@ -498,6 +505,7 @@ impl Publisher {
             input.deformation.bone_depth = self.bone_depth;
             input.pressure = sample.force.norm() / self.face_area;
             input.time = now;
+            input.lateral_offset = lateral_offset(&self.thigh, &pose, self.vessel_angle);
         }
     }
 }
@@ -529,10 +537,10 @@ fn spawn_imaging(shared: Arc<Shared>, scenario: Scenario) -> Result<()> {
                         vein = v;
                     }
                 }
-                let (pressure, time) = match shared.image_input.lock() {
+                let (pressure, time, lateral_offset) = match shared.image_input.lock() {
                     Ok(i) => {
                         local.clone_from(&i.deformation);
-                        (i.pressure, i.time)
+                        (i.pressure, i.time, i.lateral_offset)
                     }
                     Err(_) => return,
                 };
@@ -540,6 +548,7 @@ fn spawn_imaging(shared: Arc<Shared>, scenario: Scenario) -> Result<()> {
                     deformation: &local,
                     probe_pressure: pressure,
                     time,
+                    lateral_offset,
                 };
                 if renderer.render_into(&input, &mut pixels).is_ok() {
                     if let Ok(mut slot) = shared.image.lock() {

@@ -9,7 +9,7 @@
 //! into depth towards the femur, as the normal springs do.
 
 use echothigh_imaging::SectionDeformation;
-use echothigh_model::{ThighModel, Vec3};
+use echothigh_model::{ThighGeometry, ThighModel, Vec3};
 use nalgebra::Isometry3;
 
 /// Distance from `o` along unit `d` to triangle `(a, b, c)` (Möller–Trumbore),
@@ -117,9 +117,91 @@ pub fn section_deformation(
     }
 }
 
+/// The image's lateral offset in the anatomy's frame (m,
+/// [`echothigh_imaging::FrameInput::lateral_offset`]) for the probe at
+/// `pose`: the signed arc length along the skin's cross-section (the
+/// ellipse of `thigh`) from the vessels' line at angle `vessel_angle` (rad)
+/// to the probe's face centre, positive along the image's lateral axis
+/// (the probe's local `x`, which at the exam pose is the thigh's `x`). The
+/// vessels run along the thigh's axis, so the probe's `z` does not matter.
+pub fn lateral_offset(thigh: &ThighGeometry, pose: &Isometry3<f64>, vessel_angle: f64) -> f64 {
+    let (a, b) = (thigh.semi_axis_x, thigh.semi_axis_y);
+    let p = pose.translation.vector;
+    let theta = (p.y / b).atan2(p.x / a);
+    // Shortest way round from the vessels' line, in (−π, π].
+    let tau = std::f64::consts::TAU;
+    let dtheta =
+        (theta - vessel_angle + std::f64::consts::PI).rem_euclid(tau) - std::f64::consts::PI;
+    // Arc length ∫ |dP/dθ| dθ by Simpson's rule (the speed is smooth).
+    let speed = |t: f64| (a * t.sin()).hypot(b * t.cos());
+    let n = 64;
+    let h = dtheta / n as f64;
+    let arc = (0..=n)
+        .map(|i| {
+            let w = if i == 0 || i == n {
+                1.0
+            } else if i % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            };
+            w * speed(vessel_angle + i as f64 * h)
+        })
+        .sum::<f64>()
+        * h
+        / 3.0;
+    // Increasing θ moves along dP/dθ; the image's lateral axis may point
+    // either way along it.
+    let tangent = Vec3::new(-a * theta.sin(), b * theta.cos(), 0.0);
+    let lateral = pose.rotation * Vec3::x();
+    if lateral.dot(&tangent) >= 0.0 {
+        arc
+    } else {
+        -arc
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use nalgebra::{Translation3, UnitQuaternion};
+
+    fn pose_at(g: &ThighGeometry, theta: f64) -> Isometry3<f64> {
+        let s = g.surface_point(theta, 0.02);
+        // The exam pose rotated about the thigh's axis to face the skin at θ.
+        let rot =
+            UnitQuaternion::from_axis_angle(&Vec3::z_axis(), theta - std::f64::consts::FRAC_PI_2);
+        Isometry3::from_parts(Translation3::new(s[0], s[1], s[2]), rot)
+    }
+
+    /// At the vessels' line the offset is 0; a small slide by `Δθ` at the
+    /// anterior line moves the image centre by `a Δθ` (the ellipse's speed
+    /// there is the x semi-axis), towards −x for increasing θ; a quarter turn
+    /// matches the ellipse's quarter perimeter (Ramanujan's formula).
+    #[test]
+    fn offset_is_the_arc_length_from_the_vessels() {
+        let g = ThighGeometry::default();
+        let top = std::f64::consts::FRAC_PI_2;
+        assert!(lateral_offset(&g, &pose_at(&g, top), top).abs() < 1e-12);
+        let d = 1e-3;
+        let s = lateral_offset(&g, &pose_at(&g, top + d), top);
+        assert!((s - (-g.semi_axis_x * d)).abs() < 1e-8, "{s}");
+        let s = lateral_offset(&g, &pose_at(&g, top - d), top);
+        assert!((s - g.semi_axis_x * d).abs() < 1e-8, "{s}");
+        let (a, b) = (g.semi_axis_x, g.semi_axis_y);
+        let h = ((a - b) / (a + b)).powi(2);
+        let quarter = 0.25
+            * std::f64::consts::PI
+            * (a + b)
+            * (1.0 + 3.0 * h / (10.0 + (4.0 - 3.0 * h).sqrt()));
+        let s = lateral_offset(&g, &pose_at(&g, 0.0), top);
+        assert!((s - quarter).abs() < 1e-6, "{s} vs {quarter}");
+        // A probe turned end for end sees the thigh mirrored: the sign flips.
+        let flipped = pose_at(&g, top + 0.2)
+            * UnitQuaternion::from_axis_angle(&Vec3::y_axis(), std::f64::consts::PI);
+        let s = lateral_offset(&g, &pose_at(&g, top + 0.2), top);
+        assert!((lateral_offset(&g, &flipped, top) + s).abs() < 1e-12);
+    }
 
     /// A ray straight down onto a horizontal triangle meets it at the height
     /// difference; a ray beside it misses.

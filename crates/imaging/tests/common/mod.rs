@@ -27,6 +27,7 @@ pub fn render_force(r: &mut Renderer, force: f64, time: f64) -> (Vec<u8>, LumenR
         deformation: &d,
         probe_pressure: force / r.config().probe_area(),
         time,
+        lateral_offset: 0.0,
     };
     let frame = r.render(&input).unwrap();
     let lumens = r.lumens(&input).unwrap().unwrap();
