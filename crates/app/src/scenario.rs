@@ -11,7 +11,7 @@ use echothigh_device::{DeviceConfig, ExamConfig, HandConfig};
 use echothigh_haptics::HapticsConfig;
 use echothigh_imaging::{ImagingConfig, VeinState};
 use echothigh_model::{IntegratorParams, ModelConfig, ThighGeometry, TissueParams};
-use echothigh_transport::FaultConfig;
+use echothigh_transport::{in_process_pair, FaultConfig, InProcessEndpoint};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
@@ -164,6 +164,23 @@ impl Scenario {
         c.probe_width = 2.0 * self.probe.half_width;
         c.probe_elevation = 2.0 * self.probe.half_elevation;
         c
+    }
+
+    /// The `[link]` faults of each direction (haptic → physics, physics →
+    /// haptic), each seeded from `run.seed`, so that a run is reproducible.
+    pub fn link_faults(&self) -> (FaultConfig, FaultConfig) {
+        let seed = self.run.seed;
+        (
+            self.link.with_seed(seed.wrapping_mul(2).wrapping_add(1)),
+            self.link.with_seed(seed.wrapping_mul(2).wrapping_add(2)),
+        )
+    }
+
+    /// The in-process link of the threads deployments (haptic end, physics
+    /// end), with [`Scenario::link_faults`].
+    pub fn in_process_link(&self) -> (InProcessEndpoint, InProcessEndpoint) {
+        let (up, down) = self.link_faults();
+        in_process_pair(self.run.seed, up, down)
     }
 
     /// The physical model's part.

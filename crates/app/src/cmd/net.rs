@@ -103,9 +103,7 @@ pub fn server(args: ServerArgs) -> Result<()> {
     let mut link = listener
         .accept(
             token.0,
-            scenario
-                .link
-                .with_seed(scenario.run.seed.wrapping_mul(2).wrapping_add(2)),
+            scenario.link_faults().1,
             rate,
             Duration::from_secs_f64(args.accept_timeout),
             clock.now(),
@@ -155,9 +153,7 @@ pub fn client(args: ClientArgs) -> Result<()> {
     let (link, welcome) = connect(
         args.connect,
         token.0,
-        scenario
-            .link
-            .with_seed(scenario.run.seed.wrapping_mul(2).wrapping_add(1)),
+        scenario.link_faults().0,
         Duration::from_secs_f64(args.connect_timeout),
         clock.now(),
     )

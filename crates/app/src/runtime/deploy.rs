@@ -13,7 +13,6 @@ use crate::live::CouplingMode;
 use crate::scenario::Scenario;
 use anyhow::{Context, Result};
 use echothigh_device::{ExamScript, SimulatedDevice, SimulatedHand};
-use echothigh_transport::in_process_pair;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
@@ -112,16 +111,7 @@ pub fn run_threads(scenario: &Scenario) -> Result<RunOutput> {
             peer_lost: false,
         });
     }
-    let seed = scenario.run.seed;
-    let (haptic_end, mut physics_end) = in_process_pair(
-        seed,
-        scenario
-            .link
-            .with_seed(seed.wrapping_mul(2).wrapping_add(1)),
-        scenario
-            .link
-            .with_seed(seed.wrapping_mul(2).wrapping_add(2)),
-    );
+    let (haptic_end, mut physics_end) = scenario.in_process_link();
     let mut physics = PhysicsSide::new(scenario)?;
     let stop = Arc::new(AtomicBool::new(false));
     let physics_stop = stop.clone();

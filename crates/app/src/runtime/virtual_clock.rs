@@ -23,7 +23,7 @@ use echothigh_device::{
     ExamPhase, ExamScript, ForceScale, HapticDevice, SimulatedDevice, SimulatedHand,
 };
 use echothigh_haptics::Vec3;
-use echothigh_transport::{in_process_pair, InProcessEndpoint, Link, Message, ProbeMsg, SampleMsg};
+use echothigh_transport::{InProcessEndpoint, Link, Message, ProbeMsg, SampleMsg};
 
 /// Probe orientation of the exam pose: face down (−y), width along x.
 pub const EXAM_ORIENTATION: [f64; 4] = [1.0, 0.0, 0.0, 0.0];
@@ -69,14 +69,7 @@ impl VirtualRun {
         let c = &scenario.coupling;
         let physics = PhysicsSide::new(scenario).context("building the physical model")?;
         let (sink, source) = haptic_side_for(c.mode, scenario)?;
-        let seed = scenario.run.seed;
-        let up = scenario
-            .link
-            .with_seed(seed.wrapping_mul(2).wrapping_add(1));
-        let down = scenario
-            .link
-            .with_seed(seed.wrapping_mul(2).wrapping_add(2));
-        let (haptic_end, physics_end) = in_process_pair(seed, up, down);
+        let (haptic_end, physics_end) = scenario.in_process_link();
         let n_ticks = (scenario.run.duration * c.haptic_rate).ceil() as usize + 1;
         let n_steps = (scenario.run.duration / c.physics_period()).ceil() as usize + 2;
         Ok(VirtualRun {

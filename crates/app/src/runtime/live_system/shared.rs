@@ -1,0 +1,93 @@
+//! The state the live system's threads share, and the small types they
+//! hand each other.
+
+use crate::live::{LiveMesh, LiveSnapshot};
+use echothigh_imaging::{SectionDeformation, VeinState};
+use std::sync::atomic::AtomicU8;
+use std::sync::Mutex;
+
+/// Where the hand wants the probe.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct HandTarget {
+    /// Setpoint of the probe face centre (m).
+    pub position: [f64; 3],
+    /// Probe orientation (w, x, y, z).
+    pub orientation: [f64; 4],
+}
+
+/// What the haptic loop reports every tick.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct HapticStatus {
+    /// Device position (m).
+    pub device: [f64; 3],
+    /// Proxy position (m).
+    pub proxy: [f64; 3],
+    /// Rendered force (N, tissue units).
+    pub force: [f64; 3],
+    /// Age of the buffer model (s).
+    pub model_age: f64,
+    /// Ticks since the session started.
+    pub ticks: u64,
+    /// Ticks that came more than 1.5 periods after the previous one.
+    pub late: u64,
+    /// Session clock at the last tick (s).
+    pub elapsed: f64,
+}
+
+/// The echographic image's input, published by the physics.
+pub(super) struct ImageInput {
+    /// Skin displacement along the section (m).
+    pub deformation: SectionDeformation,
+    /// Mean pressure under the probe face (Pa).
+    pub pressure: f64,
+    /// Session time (s).
+    pub time: f64,
+    /// Where the probe is relative to the vessels (m, along the skin).
+    pub lateral_offset: f64,
+}
+
+/// The latest echographic frame.
+pub(super) struct ImageSlot {
+    /// 8-bit gray, row-major.
+    pub pixels: Vec<u8>,
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// Frames rendered so far.
+    pub frame: u64,
+}
+
+/// What the threads share (the real-time side only `try_lock`s).
+pub(super) struct Shared {
+    /// Static mesh topology.
+    pub mesh: LiveMesh,
+    /// Latest physics state.
+    pub snapshot: Mutex<LiveSnapshot>,
+    /// Latest input of the imaging thread.
+    pub image_input: Mutex<ImageInput>,
+    /// Latest frame.
+    pub image: Mutex<ImageSlot>,
+    /// Vein state code ([`vein_code`]).
+    pub vein: AtomicU8,
+    /// The haptic loop's status handoff of the running session.
+    pub haptic: Mutex<Option<triple_buffer::Output<HapticStatus>>>,
+}
+
+/// The vein state as stored in [`Shared::vein`].
+pub(super) fn vein_code(v: VeinState) -> u8 {
+    match v {
+        VeinState::Healthy => 0,
+        VeinState::Acute => 1,
+        VeinState::Chronic => 2,
+    }
+}
+
+/// The inverse of [`vein_code`] (unknown codes are healthy).
+pub(super) fn vein_of(code: u8) -> VeinState {
+    match code {
+        1 => VeinState::Acute,
+        2 => VeinState::Chronic,
+        _ => VeinState::Healthy,
+    }
+}
