@@ -122,6 +122,10 @@ pub(super) fn spawn_imaging(shared: Arc<Shared>, scenario: Scenario) -> Result<(
             };
             let mut local = SectionDeformation::rest(0.04);
             let mut pixels = vec![0u8; cfg.columns * cfg.rows];
+            // A fixed-rate schedule: the render's own time does not
+            // lengthen the period (a late frame starts the next period now).
+            let period = Duration::from_millis(50);
+            let mut next = std::time::Instant::now();
             loop {
                 if Arc::strong_count(&shared) == 1 {
                     return;
@@ -152,7 +156,13 @@ pub(super) fn spawn_imaging(shared: Arc<Shared>, scenario: Scenario) -> Result<(
                         slot.frame += 1;
                     }
                 }
-                std::thread::sleep(Duration::from_millis(50));
+                next += period;
+                let now = std::time::Instant::now();
+                if next > now {
+                    std::thread::sleep(next - now);
+                } else {
+                    next = now;
+                }
             }
         })
         .context("starting the imaging thread")?;
