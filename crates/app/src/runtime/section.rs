@@ -121,13 +121,31 @@ pub fn section_deformation(
 /// [`echothigh_imaging::FrameInput::lateral_offset`]) for the probe at
 /// `pose`: the signed arc length along the skin's cross-section (the
 /// ellipse of `thigh`) from the vessels' line at angle `vessel_angle` (rad)
-/// to the probe's face centre, positive along the image's lateral axis
+/// to the skin point nearest the probe's face centre (so that pressing
+/// deeper does not pan the image), positive along the image's lateral axis
 /// (the probe's local `x`, which at the exam pose is the thigh's `x`). The
 /// vessels run along the thigh's axis, so the probe's `z` does not matter.
 pub fn lateral_offset(thigh: &ThighGeometry, pose: &Isometry3<f64>, vessel_angle: f64) -> f64 {
     let (a, b) = (thigh.semi_axis_x, thigh.semi_axis_y);
     let p = pose.translation.vector;
-    let theta = (p.y / b).atan2(p.x / a);
+    // Nearest point of the ellipse: Newton on (P(t) − p)·P'(t) = 0 from the
+    // point's own elliptic angle (a few steps; the face centre is never
+    // near the ellipse's evolute, ~50 mm deep on the anterior line).
+    let mut theta = (p.y / b).atan2(p.x / a);
+    for _ in 0..8 {
+        let (s, c) = theta.sin_cos();
+        let (dx, dy) = (a * c - p.x, b * s - p.y);
+        let f = -dx * a * s + dy * b * c;
+        let df = (a * s).powi(2) + (b * c).powi(2) - dx * a * c - dy * b * s;
+        if df <= 0.0 {
+            break;
+        }
+        let step = f / df;
+        theta -= step;
+        if step.abs() < 1e-14 {
+            break;
+        }
+    }
     // Shortest way round from the vessels' line, in (−π, π].
     let tau = std::f64::consts::TAU;
     let dtheta =
@@ -196,6 +214,18 @@ mod tests {
             * (1.0 + 3.0 * h / (10.0 + (4.0 - 3.0 * h).sqrt()));
         let s = lateral_offset(&g, &pose_at(&g, 0.0), top);
         assert!((s - quarter).abs() < 1e-6, "{s} vs {quarter}");
+        // Pressing along the skin's normal does not pan the image.
+        for theta in [top + 0.05, top - 0.3, 0.4] {
+            let skin = pose_at(&g, theta);
+            let n = g.surface_normal(theta);
+            let mut pressed = skin;
+            pressed.translation.vector -= 0.014 * Vec3::new(n[0], n[1], n[2]);
+            let (o, q) = (
+                lateral_offset(&g, &skin, top),
+                lateral_offset(&g, &pressed, top),
+            );
+            assert!((o - q).abs() < 1e-9, "θ {theta}: {o} vs pressed {q}");
+        }
         // A probe turned end for end sees the thigh mirrored: the sign flips.
         let flipped = pose_at(&g, top + 0.2)
             * UnitQuaternion::from_axis_angle(&Vec3::y_axis(), std::f64::consts::PI);
