@@ -106,3 +106,23 @@ fn default_data_parses_and_is_in_the_band() {
         (10.0..=20.0).contains(&c.force_at(0.015)) && (10.0..=20.0).contains(&c.force_at(0.020))
     );
 }
+
+/// Started with the normal springs' asymptote at its bound (the tissue
+/// thickness, where the fitted logit is flat), the fit of the default data
+/// must leave the bound: the default curve's best fit is interior (37.5 mm
+/// of 40), and a fitter stuck at the start stays at 40 mm.
+#[test]
+fn fit_of_the_default_data_leaves_the_asymptote_bound() {
+    let mut start = ModelConfig::default();
+    start.tissue.normal_a = start.tissue.normal_b / (0.9999 * start.thigh.tissue_thickness);
+    start.tissue.structural_stiffness = 193.5;
+    let cal = Calibration {
+        model: start,
+        ..Calibration::default()
+    };
+    let data = IndentationCurve::from_csv_str(DEFAULT_CSV).unwrap();
+    let rep = calibrate(&cal, &data).unwrap();
+    let fraction = rep.tissue.asymptote() / cal.model.thigh.tissue_thickness;
+    assert!(fraction < 0.99, "asymptote fraction {fraction}");
+    assert!(rep.rms < 0.15, "rms {} N", rep.rms);
+}
