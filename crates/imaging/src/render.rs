@@ -96,8 +96,8 @@ pub struct Renderer {
     pad: usize,
     /// Lateral centre of each window bin (m, image frame).
     bin_u: Vec<f64>,
-    /// The current pan, in columns (see [`Renderer::pan`]).
-    pan: isize,
+    /// The current frame's pan, in columns (see [`Renderer::pan`]).
+    pan_columns: isize,
     surface: Vec<f64>,
     warps: Vec<[VesselWarp; 2]>,
     rf: Vec<[f32; 2]>,
@@ -172,7 +172,7 @@ impl Renderer {
             padded_rows,
             pad,
             bin_u,
-            pan: 0,
+            pan_columns: 0,
             surface: vec![0.0; bins],
             warps: vec![[VesselWarp::default(); 2]; bins],
             rf: vec![[0.0; 2]; bins * padded_rows],
@@ -288,7 +288,7 @@ impl Renderer {
         self.geometry.face = face;
         self.geometry.bone = def.bone_depth;
         let (pan_m, pan) = self.pan(input.lateral_offset);
-        self.pan = pan;
+        self.pan_columns = pan;
         let ratios = self.lumens(input)?.map(|r| {
             (
                 r.vein.area / r.vein.rest_area,
@@ -316,7 +316,7 @@ impl Renderer {
         self.check_out(out)?;
         self.prepare(input)?;
         let (t, g, f, pr) = (&self.tables, &self.geometry, &self.field, self.padded_rows);
-        let w0 = self.window_start(self.pan);
+        let w0 = self.window_start(self.pan_columns);
         for (b, col) in self.rf.chunks_mut(pr).enumerate() {
             let r = f.bin_start[w0 + b] as usize..f.bin_start[w0 + b + 1] as usize;
             splat_column(
@@ -334,7 +334,7 @@ impl Renderer {
             convolve_column(t, &self.rf, pr, self.pad, j, col);
         }
         let h = f.halo;
-        let pan_m = self.pan as f64 * self.cfg.pixel_width();
+        let pan_m = self.pan_columns as f64 * self.cfg.pixel_width();
         for (j, (col, iq)) in self
             .gray
             .chunks_mut(rows)
@@ -373,8 +373,8 @@ impl Renderer {
         self.prepare(input)?;
         let (t, g, f, pr) = (&self.tables, &self.geometry, &self.field, self.padded_rows);
         let (surface, warps) = (&self.surface, &self.warps);
-        let w0 = self.window_start(self.pan);
-        let pan_m = self.pan as f64 * self.cfg.pixel_width();
+        let w0 = self.window_start(self.pan_columns);
+        let pan_m = self.pan_columns as f64 * self.cfg.pixel_width();
         self.rf.par_chunks_mut(pr).enumerate().for_each(|(b, col)| {
             let r = f.bin_start[w0 + b] as usize..f.bin_start[w0 + b + 1] as usize;
             splat_column(
