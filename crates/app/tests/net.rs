@@ -61,26 +61,22 @@ fn column(csv: &Path, name: &str) -> Vec<f64> {
         .collect()
 }
 
+/// The `haptic-client` command for `server`, running `seconds` of the exam
+/// and writing its run directory to `out`.
+fn client(server: &Server, seconds: f64, out: &Path) -> Command {
+    let mut c = Command::new(BIN);
+    c.args(["--log", "warn", "haptic-client", "--connect", &server.addr])
+        .args(["--token", TOKEN, "--duration", &seconds.to_string()])
+        .arg("--out")
+        .arg(out);
+    c
+}
+
 #[test]
 fn client_and_server_run_the_exam_over_udp() {
     let server = start_server();
     let out = std::env::temp_dir().join(format!("echothigh-net-ok-{}", std::process::id()));
-    let status = Command::new(BIN)
-        .args([
-            "--log",
-            "warn",
-            "haptic-client",
-            "--connect",
-            &server.addr,
-            "--token",
-            TOKEN,
-            "--duration",
-            "2",
-        ])
-        .arg("--out")
-        .arg(&out)
-        .status()
-        .unwrap();
+    let status = client(&server, 2.0, &out).status().unwrap();
     assert!(status.success(), "client failed: {status}");
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
@@ -98,20 +94,7 @@ fn client_and_server_run_the_exam_over_udp() {
 fn killing_the_server_fades_the_client_force() {
     let mut server = start_server();
     let out = std::env::temp_dir().join(format!("echothigh-net-kill-{}", std::process::id()));
-    let client = Command::new(BIN)
-        .args([
-            "--log",
-            "warn",
-            "haptic-client",
-            "--connect",
-            &server.addr,
-            "--token",
-            TOKEN,
-            "--duration",
-            "6",
-        ])
-        .arg("--out")
-        .arg(&out)
+    let client = client(&server, 6.0, &out)
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();

@@ -1,8 +1,9 @@
-//! Force shading across model updates: when a new buffer model arrives the
-//! rendered constraint is blended from the one displayed at that instant to
-//! the new one over one physics period, so the force's direction and
-//! magnitude do not jump (DESIGN §3; the 100 Hz steps of the paper's Fig. 4
-//! become ramps).
+//! Force shading across model updates (paper §4, one of the effects of the
+//! constraint-based framework: the surface is felt as continuous, not as a
+//! sequence of 100 Hz models). When a new buffer model arrives the rendered
+//! constraint is blended from the one displayed at that instant to the new
+//! one over one physics period, so the force's direction and magnitude do
+//! not jump (DESIGN §3; the 100 Hz steps of the paper's Fig. 4 become ramps).
 //!
 //! **What is blended.** The constraint *functions*, not the models'
 //! parameters: `φ_α(x) = Σ wᵢ φᵢ(x)` with weights summing to 1. A blend of
