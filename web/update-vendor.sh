@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Copies the built three.js ES modules pinned in package-lock.json, with their
-# licence, into crates/app/assets/web/vendor/, where `echothigh` embeds them.
+# licence, into crates/viewer/assets/web/vendor/, where `echothigh` embeds them.
 # Usage: web/update-vendor.sh   (after changing the version in package.json:
 # `npm install three@<version> --save-exact` in web/, then this script).
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
-dest="$here/../crates/app/assets/web/vendor"
+dest="$here/../crates/viewer/assets/web/vendor"
 cd "$here"
 npm ci --no-audit --no-fund
 src="$here/node_modules/three"

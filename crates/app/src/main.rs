@@ -2,7 +2,8 @@
 //! the thigh with force feedback (d'Aulignac, Balaniuk & Laugier). The binary
 //! is thin: each subcommand parses its arguments and calls the library crates.
 
-use echothigh::{bench, cmd, view};
+mod bench;
+mod cmd;
 
 use clap::{Parser, Subcommand};
 
@@ -34,9 +35,10 @@ enum Command {
     Image(cmd::image::Args),
     /// Experiments: the paper's Fig. 4 and the rate, latency and damping sweeps.
     #[command(subcommand)]
-    Experiment(echothigh::experiment::ExperimentCommand),
+    Experiment(echothigh_experiments::ExperimentCommand),
     /// The trainee's live web viewer (3D thigh, probe, image, force, exam mode).
-    View(view::Args),
+    #[cfg(feature = "viewer")]
+    View(echothigh_viewer::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -54,8 +56,9 @@ fn main() -> std::process::ExitCode {
         Command::Bench(b) => bench::run(b),
         Command::Calibrate(a) => cmd::calibrate::run(a),
         Command::Image(a) => cmd::image::run(a),
-        Command::Experiment(c) => echothigh::experiment::run(c),
-        Command::View(a) => view::run(a),
+        Command::Experiment(c) => echothigh_experiments::run(c),
+        #[cfg(feature = "viewer")]
+        Command::View(a) => echothigh_viewer::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

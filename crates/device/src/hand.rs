@@ -75,6 +75,23 @@ impl SimulatedHand {
         self.setpoint_velocity = velocity;
     }
 
+    /// Moves the setpoint towards `goal` (m) by at most `max_speed × dt`
+    /// (m/s × s), as a hand reaching for where the trainee points: a mouse
+    /// teleports, a hand does not (~0.2 m/s for a careful probe placement).
+    /// The setpoint velocity is left at zero (the hand damps against a still
+    /// setpoint, so a reach does not drag the probe). Allocates nothing.
+    pub fn slew_towards(&mut self, goal: Vec3, max_speed: f64, dt: f64) {
+        if !(dt > 0.0 && goal.iter().all(|c| c.is_finite())) {
+            return;
+        }
+        let step = goal - self.setpoint;
+        let max = max_speed.max(0.0) * dt;
+        let n = step.norm();
+        let step = if n > max { step * (max / n) } else { step };
+        self.setpoint += step;
+        self.setpoint_velocity = Vec3::zeros();
+    }
+
     /// The exam script, if any.
     pub fn script(&self) -> Option<&ExamScript> {
         self.script.as_ref()

@@ -179,6 +179,10 @@ impl UdpServer {
             let transport = UdpTransport { socket, peer: from };
             let mut endpoint = Endpoint::new(transport, token, faults);
             endpoint.merge_stats(&stats);
+            // The Hello arrived now, on the caller's clock: `now` was read
+            // before the wait, and a client that starts later than the peer
+            // timeout after the server must not be taken as already silent.
+            let now = now + start.elapsed().as_secs_f64();
             endpoint.mark_heard(hello.header.seq, now);
             let welcome = WelcomeMsg {
                 header: Header::default(),

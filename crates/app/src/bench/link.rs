@@ -3,8 +3,9 @@
 //! physics and haptic rates `echothigh run` achieves in each deployment.
 
 use crate::cmd::run::load_scenario;
-use crate::runtime::deploy::run_threads;
 use anyhow::{Context, Result};
+use echothigh_runtime::deploy::{run_threads, summarize};
+use echothigh_runtime::recorder::RecordSink;
 use echothigh_transport::{
     connect, in_process_pair, measure_round_trips, EchoResponder, FaultConfig, ListenConfig,
     RoundTripReport, UdpServer,
@@ -13,6 +14,8 @@ use serde_json::json;
 use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 use std::time::Duration;
 
 /// Arguments of `echothigh bench link`.
@@ -74,13 +77,24 @@ pub fn run(args: Args) -> Result<()> {
 
     // Achieved rates of `run`, in threads and in two processes.
     let scenario = load_scenario(None, None, Some(args.seconds))?;
-    let threads = run_threads(&scenario).context("threads deployment")?;
+    let c = &scenario.coupling;
+    let rows = |rate: f64| (args.seconds * rate * 1.5) as usize + 16;
+    let out = run_threads(
+        &scenario,
+        Arc::new(AtomicBool::new(false)),
+        RecordSink::memory(rows(c.haptic_rate)),
+        RecordSink::memory(rows(c.physics_rate)),
+    )
+    .context("threads deployment")?;
+    let threads = summarize(
+        &scenario, "threads", &out.ticks, &out.steps, &out.stats, out.end,
+    );
     let processes = run_processes(args.seconds)?;
     let report = json!({
         "round_trip": {"in_process": rtt_json(&in_process), "udp_loopback": rtt_json(&udp)},
         "run": {
-            "threads": {"physics_rate_hz": threads.summary.physics_rate, "haptic_rate_hz": threads.summary.haptic_rate,
-                        "missed_deadlines": threads.summary.missed_deadlines, "seconds": args.seconds},
+            "threads": {"physics_rate_hz": threads.physics_rate, "haptic_rate_hz": threads.haptic_rate,
+                        "missed_deadlines": threads.missed_deadlines, "seconds": args.seconds},
             "processes": processes,
         },
         "machine": {"cores": std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1)},

@@ -3,9 +3,9 @@
 //! simulated indentation experiment), prints the fitted parameters and the
 //! residual, and plots data against model.
 
-use crate::plot::{Figure, Panel, Series, PALETTE};
 use anyhow::{Context, Result};
 use echothigh_contact::calibration::{calibrate, Calibration, FitParameter, IndentationCurve};
+use echothigh_experiments::plot::{Figure, Panel, Series, PALETTE};
 use std::path::PathBuf;
 
 /// Arguments of `echothigh calibrate`.

@@ -7,13 +7,13 @@
 //! force, and the skin displacement under it is carried into the image
 //! (`runtime::section`), so the image and the force agree.
 
-use crate::runtime::physics_side::PhysicsSide;
-use crate::runtime::section::{press_to_force, StaticPress};
-use crate::scenario::Scenario;
 use anyhow::{Context, Result};
 use echothigh_imaging::{
     contact_sheet, write_gray_png, Anatomy, FrameInput, ImagingConfig, Renderer, VeinState,
 };
+use echothigh_runtime::physics_side::PhysicsSide;
+use echothigh_runtime::scenario::Scenario;
+use echothigh_runtime::section::{press_to_force, StaticPress};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `echothigh image`.

@@ -2,20 +2,23 @@
 //! haptics on the host with the device): `echothigh physics-server` and
 //! `echothigh haptic-client`, over UDP with a session token.
 
-use super::run::{default_out, load_scenario, write_run, ModeArg};
-use crate::live::CouplingMode;
-use crate::runtime::client::{run_client, ClientEnd, LoopParts};
-use crate::runtime::deploy::{scripted_device, summarize, RunOutput};
-use crate::runtime::haptic_side::haptic_side_for;
-use crate::runtime::physics_loop::{physics_loop, Clock, PhysicsEnd};
-use crate::runtime::physics_side::PhysicsSide;
-use crate::runtime::trace::write_physics;
+use super::run::{
+    default_out, expected_rows, finish_run, load_scenario, mode_name, write_scenario, ModeArg,
+};
 use anyhow::{bail, Context, Result};
-use echothigh_transport::{connect, ListenConfig, SessionToken, TokenSource, UdpServer};
+use echothigh_runtime::client::{run_client, ClientConfig, LoopParts};
+use echothigh_runtime::deploy::{client_end, scripted_device, RunOutput, RunStats};
+use echothigh_runtime::haptic_side::haptic_side_for;
+use echothigh_runtime::live::CouplingMode;
+use echothigh_runtime::physics_loop::{physics_loop, Clock, PhysicsEnd};
+use echothigh_runtime::physics_side::PhysicsSide;
+use echothigh_runtime::recorder::{RecordSink, Recording, Streams};
+use echothigh_runtime::signals::stop_on_signals;
+use echothigh_transport::{connect, LinkError, ListenConfig, SessionToken, TokenSource, UdpServer};
 use std::io::Write;
 use std::net::SocketAddr;
 use std::path::PathBuf;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::Ordering;
 use std::time::Duration;
 
 /// Arguments of `echothigh physics-server`.
@@ -42,9 +45,15 @@ pub struct ServerArgs {
     /// Silence of the client after which the server stops (s).
     #[arg(long, default_value_t = 2.0)]
     pub peer_timeout: f64,
-    /// Write the physics trace here (CSV).
+    /// Stream the physics trace into this directory (`physics.csv`, flushed
+    /// as it goes; every client's session is appended).
     #[arg(long)]
     pub trace: Option<PathBuf>,
+    /// Serve one client and exit (by default the server takes a new client
+    /// when one leaves, until SIGINT or SIGTERM, or until no client comes
+    /// within the accept timeout).
+    #[arg(long)]
+    pub once: bool,
 }
 
 /// Arguments of `echothigh haptic-client`.
@@ -78,68 +87,163 @@ pub struct ClientArgs {
     pub connect_timeout: f64,
 }
 
-/// Runs the physics server until its client leaves or goes silent.
+/// Runs the physics server: serves one haptic client after another (a new
+/// client can connect when the previous one has left or gone silent) until
+/// SIGINT or SIGTERM, or after the first with `--once`.
 pub fn server(args: ServerArgs) -> Result<()> {
     let scenario = load_scenario(args.scenario.as_deref(), None, None)?;
     let (token, source) = SessionToken::resolve_or_generate(args.token.as_deref())?;
-    let listener = UdpServer::bind(&ListenConfig {
-        addr: args.listen,
-        allow_remote: args.allow_remote,
-    })?;
-    let addr = listener.local_addr()?;
-    let mut physics = PhysicsSide::new(&scenario)?;
-    // stdout may be a pipe its reader has closed: never panic on it.
-    let mut out = std::io::stdout();
-    let _ = writeln!(out, "physics server listening on {addr}");
-    if source == TokenSource::Generated {
+    let accept_timeout = timeout_arg("--accept-timeout", args.accept_timeout)?;
+    let peer_timeout = positive_arg("--peer-timeout", args.peer_timeout)?;
+    let stop = stop_on_signals()?;
+    let mut recording = match &args.trace {
+        Some(dir) => {
+            let rows = (scenario.coupling.physics_rate * 3600.0) as u64;
+            let (rec, _, steps) = Recording::create(
+                dir,
+                "physics",
+                Streams {
+                    ticks: false,
+                    steps: true,
+                },
+                rows,
+                stop.clone(),
+            )?;
+            Some((rec, steps))
+        }
+        None => None,
+    };
+    let mut listen = args.listen;
+    let mut first = true;
+    let mut served = 0u32;
+    let mut result = Ok(());
+    'sessions: while !stop.load(Ordering::Relaxed) {
+        let mut physics = PhysicsSide::new(&scenario)?;
+        let clock = Clock::start();
+        let rate = scenario.coupling.physics_rate;
+        // Wait for a client in slices of a second, so that a signal is seen
+        // while waiting (the client repeats its Hello until answered).
+        let waited = std::time::Instant::now();
+        let mut link = loop {
+            if stop.load(Ordering::Relaxed) {
+                break 'sessions;
+            }
+            let listener = UdpServer::bind(&ListenConfig {
+                addr: listen,
+                allow_remote: args.allow_remote,
+            })?;
+            listen = listener.local_addr()?;
+            if first {
+                // stdout may be a pipe its reader has closed: never panic on it.
+                let mut out = std::io::stdout();
+                let _ = writeln!(out, "physics server listening on {listen}");
+                if source == TokenSource::Generated {
+                    let _ = writeln!(
+                        out,
+                        "session token: {token}   (give it to the client: --token {token})"
+                    );
+                }
+                let _ = out.flush();
+                first = false;
+            }
+            let left = accept_timeout.saturating_sub(waited.elapsed());
+            if left.is_zero() {
+                if served > 0 {
+                    // Clients came and went; none for the accept timeout.
+                    break 'sessions;
+                }
+                result = Err(anyhow::anyhow!(
+                    "waiting for the haptic client: no client within {} s",
+                    accept_timeout.as_secs_f64()
+                ));
+                break 'sessions;
+            }
+            let slice = left.min(Duration::from_secs(1));
+            match listener.accept(token.0, scenario.link_faults().1, rate, slice, clock.now()) {
+                Ok(l) => break l,
+                Err(LinkError::AcceptTimeout { .. }) => continue,
+                Err(e) => {
+                    result = Err(anyhow::Error::new(e).context("waiting for the haptic client"));
+                    break 'sessions;
+                }
+            }
+        };
+        served += 1;
+        tracing::info!("haptic client connected");
+        let mut discard = RecordSink::Discard;
+        let steps = recording.as_mut().map_or(&mut discard, |(_, s)| s);
+        let report = physics_loop(
+            &mut physics,
+            &mut link,
+            clock,
+            &stop,
+            rate,
+            peer_timeout,
+            steps,
+        );
+        let report = match report {
+            Ok(r) => r,
+            Err(e) => {
+                result = Err(e);
+                break;
+            }
+        };
         let _ = writeln!(
-            out,
-            "session token: {token}   (give it to the client: --token {token})"
+            std::io::stdout(),
+            "physics server: {} steps at {:.1} Hz",
+            report.steps,
+            report.rate
+        );
+        match report.end {
+            PhysicsEnd::PeerClosed | PhysicsEnd::Stopped => {}
+            PhysicsEnd::PeerSilent => tracing::warn!(
+                "the haptic client went silent for more than {peer_timeout} s: session ended"
+            ),
+        }
+        if args.once {
+            if report.end == PhysicsEnd::PeerSilent {
+                result = Err(anyhow::anyhow!(
+                    "the haptic client went silent for more than {peer_timeout} s"
+                ));
+            }
+            break;
+        }
+    }
+    if let Some((rec, _)) = recording {
+        let dir = rec.dir().to_path_buf();
+        rec.finish()?;
+        // stdout may be a pipe its reader has closed: never panic on it.
+        let _ = writeln!(
+            std::io::stdout(),
+            "physics trace written to {}",
+            dir.join("physics.csv").display()
         );
     }
-    let _ = out.flush();
-    let clock = Clock::start();
-    let rate = scenario.coupling.physics_rate;
-    let mut link = listener
-        .accept(
-            token.0,
-            scenario.link_faults().1,
-            rate,
-            Duration::from_secs_f64(args.accept_timeout),
-            clock.now(),
-        )
-        .context("waiting for the haptic client")?;
-    tracing::info!("haptic client connected");
-    let mut records = Vec::with_capacity(((3600.0 * rate) as usize).min(1 << 20));
-    let stop = AtomicBool::new(false);
-    let report = physics_loop(
-        &mut physics,
-        &mut link,
-        clock,
-        &stop,
-        rate,
-        args.peer_timeout,
-        &mut records,
-    )?;
-    if let Some(p) = &args.trace {
-        write_physics(p, &records)?;
-    }
-    let _ = writeln!(
-        std::io::stdout(),
-        "physics server: {} steps at {:.1} Hz",
-        report.steps,
-        report.rate
-    );
-    match report.end {
-        PhysicsEnd::PeerClosed | PhysicsEnd::Stopped => Ok(()),
-        PhysicsEnd::PeerSilent => bail!(
-            "the haptic client went silent for more than {} s",
-            args.peer_timeout
-        ),
-    }
+    result
 }
 
-/// Runs the haptic client for the scenario's exam.
+/// A timeout argument (s): `inf` waits forever; NaN and negative values are
+/// refused naming the flag.
+fn timeout_arg(flag: &str, seconds: f64) -> Result<Duration> {
+    if seconds == f64::INFINITY {
+        return Ok(Duration::MAX);
+    }
+    if !(seconds.is_finite() && seconds >= 0.0) {
+        bail!("{flag} must be a number of seconds ≥ 0 (or inf), got {seconds}");
+    }
+    Duration::try_from_secs_f64(seconds).with_context(|| format!("{flag} = {seconds} s"))
+}
+
+/// A strictly positive, finite duration argument (s).
+fn positive_arg(flag: &str, seconds: f64) -> Result<f64> {
+    if !(seconds.is_finite() && seconds > 0.0) {
+        bail!("{flag} must be a finite number of seconds > 0, got {seconds}");
+    }
+    Ok(seconds)
+}
+
+/// Runs the haptic client: connects, runs the exam, streams its run
+/// directory as it goes.
 pub fn client(args: ClientArgs) -> Result<()> {
     let scenario = load_scenario(args.scenario.as_deref(), args.mode, args.duration)?;
     let c = &scenario.coupling;
@@ -149,15 +253,37 @@ pub fn client(args: ClientArgs) -> Result<()> {
     let Some((token, _)) = SessionToken::from_arg_or_env(args.token.as_deref())? else {
         bail!("no session token: pass --token (printed by the server) or set ECHOTHIGH_TOKEN");
     };
+    let connect_timeout = timeout_arg("--connect-timeout", args.connect_timeout)?;
+    let dir = args.out.clone().unwrap_or_else(|| default_out("client"));
+    let stop = stop_on_signals()?;
+    // The directory, its free space and its files before connecting.
+    let (recording, ticks, _) = Recording::create(
+        &dir,
+        &mode_name(&scenario),
+        Streams {
+            ticks: true,
+            steps: false,
+        },
+        expected_rows(&scenario),
+        stop.clone(),
+    )?;
+    write_scenario(&dir, &scenario)?;
     let clock = Clock::start();
-    let (link, welcome) = connect(
+    let connected = connect(
         args.connect,
         token.0,
         scenario.link_faults().0,
-        Duration::from_secs_f64(args.connect_timeout),
+        connect_timeout,
         clock.now(),
     )
-    .with_context(|| format!("connecting to the physics server at {}", args.connect))?;
+    .with_context(|| format!("connecting to the physics server at {}", args.connect));
+    let (link, welcome) = match connected {
+        Ok(c) => c,
+        Err(e) => {
+            let _ = recording.finish();
+            return Err(e);
+        }
+    };
     tracing::info!(
         "connected to {}, physics at {} Hz",
         args.connect,
@@ -171,41 +297,44 @@ pub fn client(args: ClientArgs) -> Result<()> {
         scale: scenario.device.force_scale(),
         direct_physics: None,
     };
-    let report = run_client(
-        Some(Box::new(link)),
-        sink,
-        parts,
-        &scenario.haptics.runner,
-        scenario.run.duration,
-        c.peer_timeout,
-    )?;
-    let summary = summarize(
-        &scenario,
-        "processes",
-        &report.ticks,
-        &[],
-        report.timing.missed_deadlines,
-        scenario.run.duration,
-        report.physics_rate,
-        report.faults,
-        report.link.duplicate + report.link.stale + report.link.malformed,
-        0,
-    );
-    let out = RunOutput {
-        ticks: report.ticks,
-        steps: Vec::new(),
-        summary,
-        peer_lost: report.end == ClientEnd::PeerLost,
+    let config = ClientConfig {
+        loop_config: &scenario.haptics.runner,
+        duration: scenario.run.duration,
+        peer_timeout: c.peer_timeout,
+        stop,
     };
-    let dir = args.out.clone().unwrap_or_else(|| default_out("client"));
-    write_run(&dir, &scenario, &out)?;
-    println!("haptic client: run written to {}", dir.display());
+    let report = run_client(Some(Box::new(link)), sink, parts, config, ticks);
+    let recorded = recording.finish();
+    let report = report?;
+    let recorded = recorded?;
+    let out = RunOutput {
+        ticks: Vec::new(),
+        steps: Vec::new(),
+        stats: RunStats {
+            missed_deadlines: report.timing.missed_deadlines,
+            physics_rate: report.physics_rate,
+            faults: report.faults,
+            link_dropped: report.link.duplicate + report.link.stale + report.link.malformed,
+            dropped_records: report.dropped,
+        },
+        end: client_end(report.end),
+    };
     if let Some(t) = report.lost_at {
+        // Say "faded to zero" only if the last force written was zero.
+        let last = recorded.ticks.last().map_or(0.0, |r| {
+            (r.force[0].powi(2) + r.force[1].powi(2) + r.force[2].powi(2)).sqrt()
+        });
+        let faded = if last == 0.0 {
+            "force faded to zero".to_string()
+        } else {
+            format!("force {last:.2} N when the loop stopped, then released to zero")
+        };
+        finish_run(&dir, &scenario, "processes", &recorded.ticks, &[], &out).ok();
         bail!(
-            "the physics server at {} went silent at t = {t:.3} s: force faded to zero, client stopped (data written to {})",
+            "the physics server at {} went silent at t = {t:.3} s: {faded}, client stopped (data written to {})",
             args.connect,
             dir.display()
         );
     }
-    Ok(())
+    finish_run(&dir, &scenario, "processes", &recorded.ticks, &[], &out)
 }

@@ -3,12 +3,15 @@
 //! `haptic.csv` (1 kHz trace), `physics.csv` (physics trace), `summary.json`,
 //! `force.png` and the effective `scenario.toml`.
 
-use crate::live::CouplingMode;
-use crate::runtime::deploy::{run_threads, run_virtual, RunOutput};
-use crate::runtime::summary::plot_force;
-use crate::runtime::trace::{write_physics, write_ticks};
-use crate::scenario::Scenario;
 use anyhow::{Context, Result};
+use echothigh_experiments::plot::plot_force;
+use echothigh_runtime::deploy::{run_threads, run_virtual, summarize, RunEnd, RunOutput};
+use echothigh_runtime::live::CouplingMode;
+use echothigh_runtime::recorder::{Recording, Streams};
+use echothigh_runtime::scenario::Scenario;
+use echothigh_runtime::signals::stop_on_signals;
+use echothigh_runtime::summary::Summary;
+use echothigh_runtime::trace::{write_physics, write_ticks, PhysicsRecord, TickRecord};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -86,61 +89,65 @@ pub fn load_scenario(
     Ok(s)
 }
 
-/// Default run directory.
-pub fn default_out(prefix: &str) -> PathBuf {
-    let secs = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs());
-    PathBuf::from("runs").join(format!("{prefix}-{secs}"))
+pub use echothigh_runtime::summary::default_out;
+
+/// Rows a run of `scenario` writes (haptic ticks and physics steps), for
+/// the free-space check.
+pub fn expected_rows(scenario: &Scenario) -> u64 {
+    let c = &scenario.coupling;
+    (scenario.run.duration * (c.haptic_rate + c.physics_rate)).ceil() as u64
 }
 
-/// Writes a run's files into `dir`.
-pub fn write_run(dir: &Path, scenario: &Scenario, out: &RunOutput) -> Result<()> {
+/// Writes a whole run's files into `dir` (the virtual clock's runs, kept in
+/// memory; the real-time runs stream theirs through a [`Recording`]).
+pub fn write_run(dir: &Path, scenario: &Scenario, out: &RunOutput, deployment: &str) -> Result<()> {
+    if dir.join("summary.json").exists() || dir.join("haptic.csv").exists() {
+        anyhow::bail!(
+            "{} already holds a run: choose another --out (nothing was overwritten)",
+            dir.display()
+        );
+    }
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let mode = out.summary.mode.clone();
+    write_scenario(dir, scenario)?;
+    let mode = mode_name(scenario);
     write_ticks(&dir.join("haptic.csv"), &mode, &out.ticks)?;
     write_physics(&dir.join("physics.csv"), &out.steps)?;
-    let json = serde_json::to_string_pretty(&out.summary)?;
-    std::fs::write(dir.join("summary.json"), json + "\n").context("writing summary.json")?;
-    let toml = toml::to_string(scenario).context("serializing the scenario")?;
-    std::fs::write(dir.join("scenario.toml"), toml).context("writing scenario.toml")?;
-    plot_force(&dir.join("force.png"), &mode, &out.ticks, &out.steps)?;
-    Ok(())
+    finish_run(dir, scenario, deployment, &out.ticks, &out.steps, out)
 }
 
-/// Runs the command.
-pub fn run(args: Args) -> Result<()> {
-    let scenario = load_scenario(args.scenario.as_deref(), args.mode, args.duration)?;
-    let dir = args.out.clone().unwrap_or_else(|| default_out("run"));
-    let d = scenario.run.duration;
-    let bar = ProgressBar::new(1000);
-    bar.set_style(
-        ProgressStyle::with_template("{spinner} {msg} [{bar:40}] {percent:>3}% {elapsed}")
-            .map_err(|e| anyhow::anyhow!("{e}"))?
-            .progress_chars("=> "),
-    );
-    bar.set_message(format!("{:?} coupling, {d:.1} s exam", scenario.coupling.mode).to_lowercase());
-    let out = match args.deployment {
-        Deployment::Virtual => run_virtual(&scenario, |f| bar.set_position((f * 1000.0) as u64))?,
-        Deployment::Threads => {
-            let done = Arc::new(AtomicBool::new(false));
-            let (b, dn) = (bar.clone(), done.clone());
-            let ticker = std::thread::spawn(move || {
-                let t0 = std::time::Instant::now();
-                while !dn.load(Ordering::Relaxed) {
-                    b.set_position(((t0.elapsed().as_secs_f64() / d).min(1.0) * 1000.0) as u64);
-                    std::thread::sleep(Duration::from_millis(100));
-                }
-            });
-            let r = run_threads(&scenario);
-            done.store(true, Ordering::Relaxed);
-            let _ = ticker.join();
-            r?
-        }
-    };
-    bar.finish_and_clear();
-    write_run(&dir, &scenario, &out)?;
-    let s = &out.summary;
+/// The coupling mode's name as the files write it.
+pub fn mode_name(scenario: &Scenario) -> String {
+    format!("{:?}", scenario.coupling.mode).to_lowercase()
+}
+
+/// Writes the effective scenario (first, so that an interrupted run still
+/// says what it ran).
+pub fn write_scenario(dir: &Path, scenario: &Scenario) -> Result<()> {
+    let path = dir.join("scenario.toml");
+    let toml = toml::to_string(scenario).context("serializing the scenario")?;
+    std::fs::write(&path, toml).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Writes `summary.json` and `force.png` from the recorded trace; returns
+/// the summary.
+pub fn finish_run(
+    dir: &Path,
+    scenario: &Scenario,
+    deployment: &str,
+    ticks: &[TickRecord],
+    steps: &[PhysicsRecord],
+    out: &RunOutput,
+) -> Result<()> {
+    let summary = summarize(scenario, deployment, ticks, steps, &out.stats, out.end);
+    let path = dir.join("summary.json");
+    let json = serde_json::to_string_pretty(&summary)?;
+    std::fs::write(&path, json + "\n").with_context(|| format!("writing {}", path.display()))?;
+    plot_force(&dir.join("force.png"), &summary.mode, ticks, steps)?;
+    report(dir, &summary);
+    verdict(dir, &summary)
+}
+
+fn report(dir: &Path, s: &Summary) {
     println!("run written to {}", dir.display());
     println!(
         "mode {} ({}): {} ticks at {:.0} Hz, {} missed deadlines; {} physics steps at {:.1} Hz; \
@@ -155,10 +162,91 @@ pub fn run(args: Args) -> Result<()> {
         s.peak_force,
         s.peak_device_force
     );
-    if out.peer_lost {
+}
+
+/// A run that diverged, lost its peer or was interrupted exits non-zero,
+/// saying so (its data is written).
+fn verdict(dir: &Path, s: &Summary) -> Result<()> {
+    if s.non_finite {
         anyhow::bail!(
-            "the physics went silent during the run; the force was faded out (data written)"
+            "the run diverged: NaN or infinite values in {} (see summary.json)",
+            dir.display()
         );
     }
-    Ok(())
+    match s.end {
+        RunEnd::Completed => Ok(()),
+        RunEnd::PeerLost => anyhow::bail!(
+            "the physics went silent during the run; the force was faded out (data written to {})",
+            dir.display()
+        ),
+        RunEnd::Interrupted => anyhow::bail!(
+            "interrupted at t = {:.3} s; every sample up to then is in {}",
+            s.duration,
+            dir.display()
+        ),
+    }
+}
+
+/// Runs the command.
+pub fn run(args: Args) -> Result<()> {
+    let scenario = load_scenario(args.scenario.as_deref(), args.mode, args.duration)?;
+    let dir = args.out.clone().unwrap_or_else(|| default_out("run"));
+    let stop = stop_on_signals()?;
+    let d = scenario.run.duration;
+    let bar = ProgressBar::new(1000);
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {msg} [{bar:40}] {percent:>3}% {elapsed}")
+            .map_err(|e| anyhow::anyhow!("{e}"))?
+            .progress_chars("=> "),
+    );
+    bar.set_message(format!("{:?} coupling, {d:.1} s exam", scenario.coupling.mode).to_lowercase());
+    match args.deployment {
+        Deployment::Virtual => {
+            // Check the directory before the run, write after it.
+            if dir.join("summary.json").exists() || dir.join("haptic.csv").exists() {
+                anyhow::bail!(
+                    "{} already holds a run: choose another --out (nothing was overwritten)",
+                    dir.display()
+                );
+            }
+            let out = run_virtual(&scenario, &stop, |f| bar.set_position((f * 1000.0) as u64))?;
+            bar.finish_and_clear();
+            write_run(&dir, &scenario, &out, "virtual")
+        }
+        Deployment::Threads => {
+            let (recording, ticks, steps) = Recording::create(
+                &dir,
+                &mode_name(&scenario),
+                Streams::BOTH,
+                expected_rows(&scenario),
+                stop.clone(),
+            )?;
+            write_scenario(&dir, &scenario)?;
+            let done = Arc::new(AtomicBool::new(false));
+            let (b, dn) = (bar.clone(), done.clone());
+            let ticker = std::thread::spawn(move || {
+                let t0 = std::time::Instant::now();
+                while !dn.load(Ordering::Relaxed) {
+                    b.set_position(((t0.elapsed().as_secs_f64() / d).min(1.0) * 1000.0) as u64);
+                    std::thread::sleep(Duration::from_millis(100));
+                }
+            });
+            let out = run_threads(&scenario, stop, ticks, steps);
+            done.store(true, Ordering::Relaxed);
+            let _ = ticker.join();
+            bar.finish_and_clear();
+            // The recorder is finished on every path: what it holds is written.
+            let recorded = recording.finish();
+            let out = out?;
+            let recorded = recorded?;
+            finish_run(
+                &dir,
+                &scenario,
+                "threads",
+                &recorded.ticks,
+                &recorded.steps,
+                &out,
+            )
+        }
+    }
 }

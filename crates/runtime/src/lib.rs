@@ -1,0 +1,24 @@
+//! The running system (paper Fig. 1, `DESIGN.md` §1): the physics side, the
+//! link, the haptic side (model manager + haptic loop) and the simulated
+//! device, deployed on a deterministic virtual clock, as real-time threads of
+//! one process, or as two processes over UDP; the scenario file that
+//! configures it and the seam to its front ends (`live`).
+
+#![warn(missing_docs)]
+
+pub mod client;
+pub mod coupling;
+pub mod deploy;
+pub mod haptic_side;
+pub mod live;
+pub mod live_system;
+pub mod physics_loop;
+pub mod physics_side;
+pub mod recorder;
+pub mod scenario;
+pub mod section;
+pub mod signals;
+pub mod summary;
+pub mod tick;
+pub mod trace;
+pub mod virtual_clock;

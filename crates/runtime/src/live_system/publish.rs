@@ -1,0 +1,170 @@
+//! What the physics publishes for the front end (mesh, forces, the section
+//! under the probe) and the imaging thread that renders it.
+
+use super::shared::{vein_of, Shared};
+use crate::physics_side::{self, PhysicsSide};
+use crate::scenario::Scenario;
+use crate::section::{lateral_offset, section_deformation, SectionScratch};
+use anyhow::{Context, Result};
+use echothigh_imaging::{Anatomy, FrameInput, Renderer, SectionDeformation, VeinState};
+use echothigh_model::ThighGeometry;
+use echothigh_transport::ProbeMsg;
+use nalgebra::Isometry3;
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+use std::time::Duration;
+
+/// Copies the physics state into the shared snapshot and image input,
+/// never waiting for a lock.
+pub(super) struct Publisher {
+    shared: Arc<Shared>,
+    scratch: SectionScratch,
+    section: SectionDeformation,
+    width: f64,
+    samples: usize,
+    face_area: f64,
+    asymptote: f64,
+    bone_depth: f64,
+    thigh: ThighGeometry,
+    vessel_angle: f64,
+    steps: u64,
+    first: Option<f64>,
+}
+
+impl Publisher {
+    pub(super) fn new(shared: Arc<Shared>, s: &Scenario) -> Self {
+        let img = s.imaging_config();
+        let bone_depth = Anatomy::new(&img.anatomy, VeinState::Healthy)
+            .map(|a| a.femur_top())
+            .unwrap_or(0.04);
+        Publisher {
+            shared,
+            scratch: SectionScratch::default(),
+            section: SectionDeformation::rest(bone_depth),
+            width: img.width,
+            samples: 81,
+            face_area: 4.0 * s.probe.half_width * s.probe.half_elevation,
+            asymptote: s.tissue.asymptote(),
+            bone_depth,
+            thigh: s.thigh.clone(),
+            vessel_angle: s.patient.vessel_angle,
+            steps: 0,
+            first: None,
+        }
+    }
+
+    pub(super) fn publish(&mut self, physics: &PhysicsSide, probe: &ProbeMsg, now: f64) {
+        self.steps += 1;
+        let first = *self.first.get_or_insert(now);
+        let Some(sample) = physics.last_sample() else {
+            return;
+        };
+        let model = physics.model();
+        if let Ok(mut snap) = self.shared.snapshot.try_lock() {
+            let mesh = model.mesh();
+            let (x, anchors, rest) = (model.positions(), mesh.anchors(), mesh.rest_positions());
+            snap.positions.clear();
+            snap.compression.clear();
+            for i in 0..x.len() {
+                snap.positions
+                    .push([x[i].x as f32, x[i].y as f32, x[i].z as f32]);
+                let c =
+                    ((rest[i] - anchors[i]).norm() - (x[i] - anchors[i]).norm()) / self.asymptote;
+                snap.compression.push(c.clamp(0.0, 1.0) as f32);
+            }
+            snap.status.time = now;
+            snap.status.probe_position = probe.position;
+            snap.status.probe_orientation = probe.orientation;
+            snap.status.physics_force = sample.force.into();
+            snap.status.physics_rate = if now > first {
+                (self.steps - 1) as f64 / (now - first)
+            } else {
+                0.0
+            };
+        }
+        let pose: Isometry3<f64> = physics_side::probe_pose(probe);
+        section_deformation(
+            model,
+            &pose,
+            self.width,
+            self.samples,
+            self.bone_depth,
+            &mut self.scratch,
+            &mut self.section,
+        );
+        if let Ok(mut input) = self.shared.image_input.try_lock() {
+            input.deformation.lateral.clone_from(&self.section.lateral);
+            input
+                .deformation
+                .surface_displacement
+                .clone_from(&self.section.surface_displacement);
+            input.deformation.bone_depth = self.bone_depth;
+            input.pressure = sample.force.norm() / self.face_area;
+            input.time = now;
+            input.lateral_offset = lateral_offset(&self.thigh, &pose, self.vessel_angle);
+        }
+    }
+}
+
+/// The imaging thread: renders the section under the probe at ~20 frames/s.
+pub(super) fn spawn_imaging(shared: Arc<Shared>, scenario: Scenario) -> Result<()> {
+    let cfg = scenario.imaging_config();
+    std::thread::Builder::new()
+        .name("imaging".into())
+        .spawn(move || {
+            let mut vein = shared.vein.load(Ordering::Relaxed);
+            let mut renderer = match Renderer::new(&cfg, vein_of(vein)) {
+                Ok(r) => r,
+                Err(e) => {
+                    tracing::error!("imaging disabled: {e}");
+                    return;
+                }
+            };
+            let mut local = SectionDeformation::rest(0.04);
+            let mut pixels = vec![0u8; cfg.columns * cfg.rows];
+            // A fixed-rate schedule: the render's own time does not
+            // lengthen the period (a late frame starts the next period now).
+            let period = Duration::from_millis(50);
+            let mut next = std::time::Instant::now();
+            loop {
+                if Arc::strong_count(&shared) == 1 {
+                    return;
+                }
+                let v = shared.vein.load(Ordering::Relaxed);
+                if v != vein {
+                    if let Ok(r) = Renderer::new(&cfg, vein_of(v)) {
+                        renderer = r;
+                        vein = v;
+                    }
+                }
+                let (pressure, time, lateral_offset) = match shared.image_input.lock() {
+                    Ok(i) => {
+                        local.clone_from(&i.deformation);
+                        (i.pressure, i.time, i.lateral_offset)
+                    }
+                    Err(_) => return,
+                };
+                let input = FrameInput {
+                    deformation: &local,
+                    probe_pressure: pressure,
+                    time,
+                    lateral_offset,
+                };
+                if renderer.render_into(&input, &mut pixels).is_ok() {
+                    if let Ok(mut slot) = shared.image.lock() {
+                        slot.pixels.copy_from_slice(&pixels);
+                        slot.frame += 1;
+                    }
+                }
+                next += period;
+                let now = std::time::Instant::now();
+                if next > now {
+                    std::thread::sleep(next - now);
+                } else {
+                    next = now;
+                }
+            }
+        })
+        .context("starting the imaging thread")?;
+    Ok(())
+}

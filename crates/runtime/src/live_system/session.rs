@@ -1,0 +1,313 @@
+//! A session of the live system: its physics, link and haptic-loop
+//! threads, started with one set of settings and stopped to change them.
+//!
+//! Stopping a session hands its state to the next ([`Carried`]): the thigh's
+//! deformation and velocities, and the device's and hand's positions, so
+//! that changing the coupling mode, the physics rate or the latency keeps the
+//! probe where it is, pressed as it was, instead of restarting from rest.
+
+use super::publish::Publisher;
+use super::shared::{HandTarget, HapticStatus, Shared};
+use crate::haptic_side::{haptic_side_for, SampleSink};
+use crate::live::CouplingMode;
+use crate::physics_loop::{physics_loop_with, Clock};
+use crate::physics_side::PhysicsSide;
+use crate::scenario::Scenario;
+use crate::tick::{HapticTick, TickObserver};
+use crate::trace::{PhysicsRecord, TickRecord};
+use anyhow::{Context, Result};
+use echothigh_device::{ExamScript, HapticDevice, SimulatedDevice, SimulatedHand};
+use echothigh_haptics::{LoopRunner, Vec3};
+use echothigh_transport::{InProcessEndpoint, Link, Message, ProbeMsg};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+/// The device and the hand gripping it (m, m/s).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct DeviceState {
+    /// End-effector position (m).
+    pub position: Vec3,
+    /// End-effector velocity (m/s).
+    pub velocity: Vec3,
+    /// The hand's setpoint (m).
+    pub setpoint: Vec3,
+}
+
+/// What a stopped session hands to the next one.
+#[derive(Default)]
+pub(super) struct Carried {
+    /// The physics side: the thigh's positions and velocities, the contact.
+    pub physics: Option<PhysicsSide>,
+    /// The device and hand (none: start at the hand's target, at rest).
+    pub device: Option<DeviceState>,
+}
+
+/// The running threads of one session.
+pub(super) struct Session {
+    stop: Arc<AtomicBool>,
+    /// The physics thread (none in `direct` mode, where the haptic loop steps it).
+    physics: Option<JoinHandle<PhysicsSide>>,
+    /// The haptic loop: returns the physics it stepped (`direct`) and the device.
+    haptic: JoinHandle<(Option<PhysicsSide>, DeviceState)>,
+    others: Vec<JoinHandle<()>>,
+    /// The hand's target, read by the haptic loop.
+    pub target: triple_buffer::Input<HandTarget>,
+}
+
+impl Session {
+    /// Stops every thread and returns their state (what a thread that
+    /// panicked held is lost: the next session starts that part from rest).
+    pub fn stop(self) -> Carried {
+        self.stop.store(true, Ordering::Relaxed);
+        for h in self.others {
+            let _ = h.join();
+        }
+        let threaded = self.physics.and_then(|h| h.join().ok());
+        let (direct, device) = match self.haptic.join() {
+            Ok((p, d)) => (p, Some(d)),
+            Err(_) => (None, None),
+        };
+        Carried {
+            physics: threaded.or(direct),
+            device,
+        }
+    }
+}
+
+/// Starts the threads of a session for `scenario`, continuing from `carried`
+/// (the thigh's state, and the device's unless the exam script drives it).
+pub(super) fn start_session(
+    shared: &Arc<Shared>,
+    scenario: &Scenario,
+    exam: bool,
+    target: HandTarget,
+    carried: Carried,
+) -> Result<Session> {
+    let c = scenario.coupling.clone();
+    let stop = Arc::new(AtomicBool::new(false));
+    let (target_in, mut target_out) = triple_buffer::triple_buffer(&target);
+    let (status_in, status_out) = triple_buffer::triple_buffer(&HapticStatus::default());
+    *shared
+        .haptic
+        .lock()
+        .map_err(|_| anyhow::anyhow!("live state poisoned"))? = Some(status_out);
+    let device = if exam {
+        let script = ExamScript::new(scenario.exam.clone()).map_err(anyhow::Error::msg)?;
+        let hand = SimulatedHand::scripted(scenario.hand, script).map_err(anyhow::Error::msg)?;
+        SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)?
+    } else {
+        let at_target = DeviceState {
+            position: Vec3::from(target.position),
+            velocity: Vec3::zeros(),
+            setpoint: Vec3::from(target.position),
+        };
+        let state = carried.device.unwrap_or(at_target);
+        let hand = SimulatedHand::new(scenario.hand, state.setpoint).map_err(anyhow::Error::msg)?;
+        let mut d =
+            SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)?;
+        d.set_state(state.position, state.velocity);
+        d
+    };
+    let start_setpoint = if exam {
+        device.position()
+    } else {
+        carried
+            .device
+            .map_or(Vec3::from(target.position), |s| s.setpoint)
+    };
+    let mut carried_physics = carried.physics;
+    let mut physics_for = |scenario: &Scenario| match carried_physics.take() {
+        Some(p) => Ok(p),
+        None => PhysicsSide::new(scenario),
+    };
+    let (sink, source) = haptic_side_for(c.mode, scenario)?;
+    let (haptic_end, physics_end) = scenario.in_process_link();
+    let (pos_in, pos_out) = triple_buffer::triple_buffer(&(0.0, ProbeMsg::default(), false));
+    let clock = Clock::start();
+    let mut others = Vec::new();
+    let mut physics_thread = None;
+    let mut publisher = Publisher::new(shared.clone(), scenario);
+    let direct = c.mode == CouplingMode::Direct;
+    let mut direct_physics: Option<PhysicsSide> = if direct {
+        Some(physics_for(scenario)?)
+    } else {
+        None
+    };
+    if !direct {
+        let mut physics = physics_for(scenario)?;
+        let (st, rate) = (stop.clone(), c.physics_rate);
+        let mut physics_end: InProcessEndpoint = physics_end;
+        physics_thread = Some(
+            std::thread::Builder::new()
+                .name("physics".into())
+                .spawn(move || {
+                    let mut records = crate::recorder::RecordSink::Discard;
+                    let r = physics_loop_with(
+                        &mut physics,
+                        &mut physics_end,
+                        clock,
+                        &st,
+                        rate,
+                        f64::INFINITY,
+                        &mut records,
+                        &mut |ph, probe| publisher.publish(ph, probe, clock.now()),
+                    );
+                    if let Err(e) = r {
+                        tracing::error!("physics thread stopped: {e:#}");
+                    }
+                    physics
+                })
+                .context("starting the physics thread")?,
+        );
+        let st = stop.clone();
+        others.push(
+            std::thread::Builder::new()
+                .name("link".into())
+                .spawn(move || link_thread(haptic_end, sink, pos_out, clock, &st))
+                .context("starting the link thread")?,
+        );
+        publisher = Publisher::new(shared.clone(), scenario);
+    }
+    let (st, scale, loop_cfg) = (
+        stop.clone(),
+        scenario.device.force_scale(),
+        scenario.haptics.runner.clone(),
+    );
+    let mut runner = LoopRunner::new(&loop_cfg).map_err(anyhow::Error::msg)?;
+    let period = 1.0 / loop_cfg.rate_hz;
+    let mut tick = HapticTick::new(device, source, scale, direct_physics.take(), period);
+    if let Some(h) = tick.device_mut().hand_mut() {
+        h.set_setpoint(start_setpoint, Vec3::zeros());
+    }
+    let mut observer = LiveObserver {
+        pose: pos_in,
+        status: status_in,
+        publisher,
+        last_publish: -1.0,
+        late: 0,
+        ticks: 0,
+        last_tick: None,
+        period,
+    };
+    let haptic = std::thread::Builder::new()
+        .name("haptic-loop".into())
+        .spawn(move || {
+            runner.run(&st, None, |_, _| {
+                let now = clock.now();
+                let tgt = *target_out.read();
+                if !exam {
+                    if let Some(h) = tick.device_mut().hand_mut() {
+                        h.slew_towards(Vec3::from(tgt.position), HAND_REACH_SPEED, period);
+                    }
+                    tick.set_orientation(tgt.orientation);
+                }
+                if let Err(e) = tick.tick(now, &mut observer) {
+                    tracing::error!("live haptic loop stopped: {e:#}");
+                    st.store(true, Ordering::Relaxed);
+                }
+            });
+            tick.release();
+            let setpoint = tick
+                .device()
+                .hand()
+                .map_or(tick.device().position(), |h| h.setpoint());
+            let state = DeviceState {
+                position: tick.device().position(),
+                velocity: tick.device().velocity(),
+                setpoint,
+            };
+            let (_, direct) = tick.into_parts();
+            (direct, state)
+        })
+        .context("starting the haptic loop")?;
+    Ok(Session {
+        stop,
+        physics: physics_thread,
+        haptic,
+        others,
+        target: target_in,
+    })
+}
+
+/// How fast the simulated hand reaches for the page's target (m/s): a mouse
+/// teleports, a hand placing a probe moves ~0.2 m/s.
+const HAND_REACH_SPEED: f64 = 0.2;
+
+/// The live haptic loop's observer: the pose to the link thread, the status
+/// to the page (both lock-free single-slot handoffs), and in `direct`
+/// coupling the physics state to the publisher every 30 ms.
+struct LiveObserver {
+    pose: triple_buffer::Input<(f64, ProbeMsg, bool)>,
+    status: triple_buffer::Input<HapticStatus>,
+    publisher: Publisher,
+    last_publish: f64,
+    late: u64,
+    ticks: u64,
+    last_tick: Option<f64>,
+    period: f64,
+}
+
+impl TickObserver for LiveObserver {
+    fn on_probe(&mut self, probe: &ProbeMsg) -> Result<()> {
+        let now = probe.t_device;
+        if let Some(l) = self.last_tick {
+            self.late += u64::from(now - l > 1.5 * self.period);
+        }
+        self.last_tick = Some(now);
+        self.pose.write((now, *probe, true));
+        Ok(())
+    }
+
+    fn on_physics_step(&mut self, physics: &PhysicsSide, probe: &ProbeMsg, step: &PhysicsRecord) {
+        if step.t - self.last_publish > 0.03 {
+            self.publisher.publish(physics, probe, step.t);
+            self.last_publish = step.t;
+        }
+    }
+
+    fn on_tick(&mut self, r: &TickRecord) {
+        self.ticks += 1;
+        let ticks = self.ticks;
+        self.status.write(HapticStatus {
+            device: r.device,
+            proxy: r.proxy,
+            force: r.force,
+            model_age: r.model_age,
+            ticks,
+            late: self.late,
+            elapsed: r.t,
+        });
+    }
+}
+
+/// The link thread of the live system: device pose out, samples in.
+fn link_thread(
+    mut link: InProcessEndpoint,
+    mut sink: SampleSink,
+    mut pos: triple_buffer::Output<(f64, ProbeMsg, bool)>,
+    clock: Clock,
+    stop: &AtomicBool,
+) {
+    let sleeper = spin_sleep::SpinSleeper::default();
+    let mut last_sent = -1.0;
+    while !stop.load(Ordering::Relaxed) {
+        let now = clock.now();
+        let (t, probe, valid) = *pos.read();
+        if valid && t > last_sent {
+            if let Err(e) = link.send(Message::Probe(probe), now) {
+                tracing::error!("live link: {e}");
+                return;
+            }
+            last_sent = t;
+        }
+        let _ = link.poll(now);
+        while let Ok(Some(m)) = link.recv(now) {
+            if let Message::Sample(s) = m {
+                sink.on_sample(&s, now);
+            }
+        }
+        sleeper.sleep(Duration::from_micros(500));
+    }
+}

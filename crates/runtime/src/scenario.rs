@@ -1,0 +1,194 @@
+//! The scenario file: one TOML document whose sections are the config
+//! structs of each crate, every key documented in its own crate with unit and
+//! default. An empty file (or none) gives the built-in default exam. Unknown
+//! keys, missing sections' bad values, NaN and out-of-range numbers are
+//! refused with the key named.
+
+use crate::coupling::CouplingConfig;
+use anyhow::{bail, Context, Result};
+use echothigh_contact::{ContactParams, Probe};
+use echothigh_device::{DeviceConfig, ExamConfig, HandConfig};
+use echothigh_haptics::HapticsConfig;
+use echothigh_imaging::{ImagingConfig, VeinState};
+use echothigh_model::{IntegratorParams, ModelConfig, ThighGeometry, TissueParams};
+use echothigh_transport::{in_process_pair, FaultConfig, InProcessEndpoint};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Run length and seed (`[run]`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RunConfig {
+    /// Simulated duration (s). Default 10 (the default exam: two presses,
+    /// holds and slides).
+    pub duration: f64,
+    /// Seed of every random choice of the run (link faults, ...). Default 1.
+    pub seed: u64,
+}
+
+impl Default for RunConfig {
+    fn default() -> Self {
+        Self {
+            duration: 10.0,
+            seed: 1,
+        }
+    }
+}
+
+/// The patient (`[patient]`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PatientConfig {
+    /// State of the femoral vein: `healthy` (compressible), `acute` (fresh
+    /// thrombus) or `chronic` (organised thrombus). Default `healthy`.
+    pub vein: VeinState,
+    /// Angle θ around the thigh (rad, `[thigh]`'s convention: π/2 is the
+    /// anterior line) of the skin line above the femoral vessels: the image
+    /// shows `[imaging.anatomy]` as configured when the probe is centred
+    /// there, and pans it as the probe slides around the thigh. Default π/2
+    /// (the default exam site).
+    pub vessel_angle: f64,
+}
+
+impl Default for PatientConfig {
+    fn default() -> Self {
+        Self {
+            vein: VeinState::Healthy,
+            vessel_angle: std::f64::consts::FRAC_PI_2,
+        }
+    }
+}
+
+/// A whole scenario.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct Scenario {
+    /// Thigh geometry and mesh resolution (`echothigh_model::ThighGeometry`).
+    pub thigh: ThighGeometry,
+    /// Tissue springs, dampers and masses (`echothigh_model::TissueParams`).
+    pub tissue: TissueParams,
+    /// Implicit integrator (`echothigh_model::IntegratorParams`).
+    pub integrator: IntegratorParams,
+    /// Probe geometry (`echothigh_contact::Probe`).
+    pub probe: Probe,
+    /// Penalty contact, Eq. 2 (`echothigh_contact::ContactParams`).
+    pub contact: ContactParams,
+    /// Buffer model and haptic loop (`echothigh_haptics::HapticsConfig`).
+    pub haptics: HapticsConfig,
+    /// Simulated haptic device (`echothigh_device::DeviceConfig`).
+    pub device: DeviceConfig,
+    /// Simulated hand impedance (`echothigh_device::HandConfig`).
+    pub hand: HandConfig,
+    /// Scripted exam (`echothigh_device::ExamConfig`).
+    pub exam: ExamConfig,
+    /// Coupling mode and rates.
+    pub coupling: CouplingConfig,
+    /// Link fault injection (`echothigh_transport::FaultConfig`).
+    pub link: FaultConfig,
+    /// Echographic image (`echothigh_imaging::ImagingConfig`).
+    pub imaging: ImagingConfig,
+    /// The patient (vein state).
+    pub patient: PatientConfig,
+    /// Run length and seed.
+    pub run: RunConfig,
+}
+
+impl Scenario {
+    /// Parses and validates a scenario from TOML text; `origin` names the
+    /// source in errors.
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Self> {
+        let s: Scenario =
+            toml::from_str(text).with_context(|| format!("invalid scenario {origin}"))?;
+        s.validate()
+            .with_context(|| format!("invalid scenario {origin}"))?;
+        Ok(s)
+    }
+
+    /// Reads a scenario file, or the built-in default when `path` is `None`.
+    pub fn load(path: Option<&Path>) -> Result<Self> {
+        match path {
+            None => {
+                let s = Scenario::default();
+                s.validate().context("built-in default scenario")?;
+                Ok(s)
+            }
+            Some(p) => {
+                let text = std::fs::read_to_string(p)
+                    .with_context(|| format!("reading scenario {}", p.display()))?;
+                Self::from_toml_str(&text, &p.display().to_string())
+            }
+        }
+    }
+
+    /// Checks every section, naming the offending key.
+    pub fn validate(&self) -> Result<()> {
+        self.model_config()
+            .validate("")
+            .map_err(anyhow::Error::msg)?;
+        self.probe.validate("probe").map_err(anyhow::Error::msg)?;
+        self.contact
+            .validate("contact")
+            .map_err(anyhow::Error::msg)?;
+        self.haptics
+            .validate("haptics")
+            .map_err(anyhow::Error::msg)?;
+        self.device.validate("device").map_err(anyhow::Error::msg)?;
+        self.hand.validate("hand").map_err(anyhow::Error::msg)?;
+        self.exam.validate("exam").map_err(anyhow::Error::msg)?;
+        self.coupling.validate("coupling")?;
+        self.link.validate("link").map_err(anyhow::Error::msg)?;
+        self.imaging
+            .validate("imaging")
+            .map_err(anyhow::Error::msg)?;
+        let a = self.patient.vessel_angle;
+        if !a.is_finite() || a.abs() > 4.0 * std::f64::consts::PI {
+            bail!("patient.vessel_angle must be a finite angle in [-4π, 4π] rad, got {a}");
+        }
+        let d = self.run.duration;
+        if !d.is_finite() || d <= 0.0 || d > 3600.0 {
+            bail!("run.duration must be in (0, 3600] s, got {d}");
+        }
+        if (self.haptics.runner.rate_hz - self.coupling.haptic_rate).abs() > 1e-9 {
+            bail!(
+                "haptics.loop.rate_hz ({}) must equal coupling.haptic_rate ({})",
+                self.haptics.runner.rate_hz,
+                self.coupling.haptic_rate
+            );
+        }
+        Ok(())
+    }
+
+    /// The imaging configuration, with the probe's face taken from `[probe]`.
+    pub fn imaging_config(&self) -> ImagingConfig {
+        let mut c = self.imaging.clone();
+        c.probe_width = 2.0 * self.probe.half_width;
+        c.probe_elevation = 2.0 * self.probe.half_elevation;
+        c
+    }
+
+    /// The `[link]` faults of each direction (haptic → physics, physics →
+    /// haptic), each seeded from `run.seed`, so that a run is reproducible.
+    pub fn link_faults(&self) -> (FaultConfig, FaultConfig) {
+        let seed = self.run.seed;
+        (
+            self.link.with_seed(seed.wrapping_mul(2).wrapping_add(1)),
+            self.link.with_seed(seed.wrapping_mul(2).wrapping_add(2)),
+        )
+    }
+
+    /// The in-process link of the threads deployments (haptic end, physics
+    /// end), with [`Scenario::link_faults`].
+    pub fn in_process_link(&self) -> (InProcessEndpoint, InProcessEndpoint) {
+        let (up, down) = self.link_faults();
+        in_process_pair(self.run.seed, up, down)
+    }
+
+    /// The physical model's part.
+    pub fn model_config(&self) -> ModelConfig {
+        ModelConfig {
+            thigh: self.thigh.clone(),
+            tissue: self.tissue.clone(),
+            integrator: self.integrator.clone(),
+        }
+    }
+}

@@ -1,0 +1,164 @@
+//! What a run records: one [`TickRecord`] per haptic tick (1 kHz) and one
+//! [`PhysicsRecord`] per physics step, written as CSV, plus a JSON
+//! [`Summary`]. Buffers are preallocated for the whole run by the caller, so
+//! recording in the real-time loop never allocates and never drops a row.
+
+use anyhow::{Context, Result};
+use serde::Serialize;
+use std::io::Write;
+use std::path::Path;
+
+/// One haptic tick. Positions in m (thigh frame), forces in N.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct TickRecord {
+    /// Time (s).
+    pub t: f64,
+    /// Device end-effector position (m).
+    pub device: [f64; 3],
+    /// Proxy position (m); equals the device position in `hold` and `direct` modes.
+    pub proxy: [f64; 3],
+    /// Force rendered, in tissue units (N).
+    pub force: [f64; 3],
+    /// Force written to the device after the force scale (N).
+    pub device_force: [f64; 3],
+    /// Age of the newest physics information used for this tick (s).
+    pub model_age: f64,
+    /// Exam phase index of the simulated hand (see `echothigh_device`), or 255 when none.
+    pub phase: u8,
+    /// True when the hand holds a press (the exam's `hold` phase).
+    pub holding: bool,
+}
+
+/// One physics step.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct PhysicsRecord {
+    /// Physics time at the start of the step (s).
+    pub t: f64,
+    /// Probe reference point used for the step (m).
+    pub probe: [f64; 3],
+    /// Distance sent to the haptic side (m).
+    pub distance: f64,
+    /// Its gradient (unit).
+    pub gradient: [f64; 3],
+    /// Local stiffness (N/m).
+    pub stiffness: f64,
+    /// Net contact force on the probe (N).
+    pub force: [f64; 3],
+    /// Newton iterations of the step.
+    pub newton_iterations: u32,
+    /// CG iterations of the step (all Newton iterations).
+    pub cg_iterations: u32,
+    /// Times the asymptote limiter acted.
+    pub limited: u32,
+    /// Wall-clock compute time of the step (s); 0 on the virtual clock.
+    pub compute_time: f64,
+}
+
+fn norm(v: [f64; 3]) -> f64 {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
+}
+
+/// Writes the header of `haptic.csv`.
+pub fn write_tick_header(w: &mut dyn Write, _mode: &str) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "t,device_x,device_y,device_z,proxy_x,proxy_y,proxy_z,force_x,force_y,force_z,force,\
+         device_force_x,device_force_y,device_force_z,model_age,phase,holding,mode"
+    )
+}
+
+/// Writes one row of `haptic.csv` (`mode`: the coupling mode's name).
+pub fn write_tick_row(w: &mut dyn Write, r: &TickRecord, mode: &str) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "{:.4},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.4},{},{},{}",
+        r.t,
+        r.device[0],
+        r.device[1],
+        r.device[2],
+        r.proxy[0],
+        r.proxy[1],
+        r.proxy[2],
+        r.force[0],
+        r.force[1],
+        r.force[2],
+        norm(r.force),
+        r.device_force[0],
+        r.device_force[1],
+        r.device_force[2],
+        r.model_age,
+        r.phase,
+        u8::from(r.holding),
+        mode
+    )
+}
+
+/// Writes the header of `physics.csv`.
+pub fn write_physics_header(w: &mut dyn Write) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "t,probe_x,probe_y,probe_z,distance,grad_x,grad_y,grad_z,stiffness,force_x,force_y,force_z,force,\
+         newton_iterations,cg_iterations,limited,compute_time"
+    )
+}
+
+/// Writes one row of `physics.csv`.
+pub fn write_physics_row(w: &mut dyn Write, r: &PhysicsRecord) -> std::io::Result<()> {
+    writeln!(
+        w,
+        "{:.4},{:.7},{:.7},{:.7},{:.7},{:.6},{:.6},{:.6},{:.3},{:.5},{:.5},{:.5},{:.5},{},{},{},{:.6}",
+        r.t,
+        r.probe[0],
+        r.probe[1],
+        r.probe[2],
+        r.distance,
+        r.gradient[0],
+        r.gradient[1],
+        r.gradient[2],
+        r.stiffness,
+        r.force[0],
+        r.force[1],
+        r.force[2],
+        norm(r.force),
+        r.newton_iterations,
+        r.cg_iterations,
+        r.limited,
+        r.compute_time
+    )
+}
+
+/// Writes the 1 kHz trace as CSV (a whole trace at once; runs stream theirs
+/// through [`crate::recorder`]).
+pub fn write_ticks(path: &Path, mode: &str, rows: &[TickRecord]) -> Result<()> {
+    let file =
+        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut w = std::io::BufWriter::new(file);
+    let mut write = || -> std::io::Result<()> {
+        write_tick_header(&mut w, mode)?;
+        for r in rows {
+            write_tick_row(&mut w, r, mode)?;
+        }
+        w.flush()
+    };
+    write().with_context(|| format!("writing {}", path.display()))
+}
+
+/// Writes the physics trace as CSV (a whole trace at once).
+pub fn write_physics(path: &Path, rows: &[PhysicsRecord]) -> Result<()> {
+    let file =
+        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut w = std::io::BufWriter::new(file);
+    let mut write = || -> std::io::Result<()> {
+        write_physics_header(&mut w)?;
+        for r in rows {
+            write_physics_row(&mut w, r)?;
+        }
+        w.flush()
+    };
+    write().with_context(|| format!("writing {}", path.display()))
+}
+
+/// Force magnitude of each tick (N).
+pub fn force_magnitudes(rows: &[TickRecord]) -> Vec<f64> {
+    rows.iter().map(|r| norm(r.force)).collect()
+}

@@ -1,0 +1,177 @@
+//! A test double of the live runtime: an elliptic-cylinder surface indented
+//! analytically under the probe, with a stiffening force
+//! `F = k₀ d / (1 − d/d_max)` (the shape of the paper's normal spring
+//! `x/(ax + b)`), so the server's tests see forces that rise with the press.
+
+use echothigh_runtime::live::{
+    CouplingMode, LiveCommand, LiveControl, LiveMesh, LiveSnapshot, LiveStatus, VeinKind,
+};
+use std::sync::Mutex;
+
+const N_THETA: usize = 24;
+const N_Z: usize = 10;
+const SEMI_X: f64 = 0.085;
+const SEMI_Y: f64 = 0.07;
+const LENGTH: f64 = 0.3;
+const K0: f64 = 500.0;
+const D_MAX: f64 = 0.04;
+const IMAGE: (u32, u32) = (32, 24);
+
+/// The double's mutable state.
+#[derive(Debug, Default)]
+struct Inner {
+    probe: Option<(f64, f64, f64, f64)>,
+    vein: Option<VeinKind>,
+    mode: Option<CouplingMode>,
+    rate: f64,
+    latency: f64,
+    playing: bool,
+    frame: u64,
+    commands: Vec<LiveCommand>,
+}
+
+/// A [`LiveControl`] for tests.
+#[derive(Debug, Default)]
+pub struct FakeLive {
+    inner: Mutex<Inner>,
+}
+
+impl FakeLive {
+    /// A thigh at rest, healthy vein, buffer mode.
+    pub fn new() -> Self {
+        let f = Self::default();
+        {
+            let mut i = f.inner.lock().unwrap();
+            i.vein = Some(VeinKind::Healthy);
+            i.mode = Some(CouplingMode::Buffer);
+            i.rate = 100.0;
+        }
+        f
+    }
+
+    /// Commands received so far.
+    pub fn commands(&self) -> Vec<LiveCommand> {
+        self.inner.lock().unwrap().commands.clone()
+    }
+
+    fn rest(i_t: usize, i_z: usize) -> [f64; 3] {
+        let t = i_t as f64 / N_THETA as f64 * std::f64::consts::TAU;
+        let z = i_z as f64 / (N_Z - 1) as f64 * LENGTH - LENGTH / 2.0;
+        [SEMI_X * t.sin(), SEMI_Y * t.cos(), z]
+    }
+}
+
+impl LiveControl for FakeLive {
+    fn mesh(&self) -> LiveMesh {
+        let mut rest = Vec::new();
+        for i_z in 0..N_Z {
+            for i_t in 0..N_THETA {
+                rest.push(Self::rest(i_t, i_z).map(|c| c as f32));
+            }
+        }
+        let mut triangles = Vec::new();
+        for i_z in 0..N_Z - 1 {
+            for i_t in 0..N_THETA {
+                let a = (i_z * N_THETA + i_t) as u32;
+                let b = (i_z * N_THETA + (i_t + 1) % N_THETA) as u32;
+                let (c, d) = (a + N_THETA as u32, b + N_THETA as u32);
+                triangles.push([a, b, c]);
+                triangles.push([b, d, c]);
+            }
+        }
+        LiveMesh { rest, triangles }
+    }
+
+    fn snapshot(&self, out: &mut LiveSnapshot) {
+        let i = self.inner.lock().unwrap();
+        let (theta, z0, depth, _tilt) = i.probe.unwrap_or((0.0, 0.0, 0.0, 0.0));
+        let pressing = i.probe.is_some();
+        out.positions.clear();
+        out.compression.clear();
+        for i_z in 0..N_Z {
+            for i_t in 0..N_THETA {
+                let p = Self::rest(i_t, i_z);
+                let t = i_t as f64 / N_THETA as f64 * std::f64::consts::TAU;
+                let near = (angle_diff(t, theta).abs() < 0.3) && (p[2] - z0).abs() < 0.03;
+                let d = if pressing && near { depth } else { 0.0 };
+                let s = 1.0 - d / SEMI_Y;
+                out.positions
+                    .push([(p[0] * s) as f32, (p[1] * s) as f32, p[2] as f32]);
+                out.compression.push((d / D_MAX) as f32);
+            }
+        }
+        let f = if pressing {
+            K0 * depth / (1.0 - depth / D_MAX)
+        } else {
+            0.0
+        };
+        let n = [theta.sin(), theta.cos(), 0.0];
+        let probe = [SEMI_X * theta.sin(), SEMI_Y * theta.cos(), z0];
+        out.status = LiveStatus {
+            time: out.status.time + 0.01,
+            probe_position: probe,
+            probe_orientation: [1.0, 0.0, 0.0, 0.0],
+            device: probe,
+            proxy: probe,
+            rendered_force: n.map(|c| c * f),
+            physics_force: n.map(|c| c * f),
+            max_force: 30.0,
+            physics_rate: i.rate,
+            haptic_rate: 1000.0,
+            missed_deadlines: 0,
+            model_age: 0.0,
+            mode: i.mode,
+            physics_rate_setting: i.rate,
+            latency_setting: i.latency,
+            exam_playing: i.playing,
+        };
+    }
+
+    fn image(&self, out: &mut Vec<u8>) -> (u32, u32, u64) {
+        let mut i = self.inner.lock().unwrap();
+        i.frame += 1;
+        out.clear();
+        out.extend((0..IMAGE.0 * IMAGE.1).map(|k| (k % 251) as u8));
+        (IMAGE.0, IMAGE.1, i.frame)
+    }
+
+    fn vein(&self) -> VeinKind {
+        self.inner.lock().unwrap().vein.unwrap_or(VeinKind::Healthy)
+    }
+
+    fn command(&self, cmd: LiveCommand) -> Result<(), String> {
+        let mut i = self.inner.lock().unwrap();
+        i.commands.push(cmd.clone());
+        match cmd {
+            LiveCommand::Probe {
+                theta,
+                z,
+                depth,
+                tilt,
+            } => {
+                if z.abs() > LENGTH / 2.0 {
+                    return Err(format!("probe.z = {z} m is off the thigh"));
+                }
+                i.probe = Some((theta, z, depth.min(0.9 * D_MAX), tilt));
+            }
+            LiveCommand::Lift | LiveCommand::Reset => i.probe = None,
+            LiveCommand::PlayExam => i.playing = true,
+            LiveCommand::StopExam => i.playing = false,
+            LiveCommand::SetVein { vein } => i.vein = Some(vein),
+            LiveCommand::SetMode { mode } => i.mode = Some(mode),
+            LiveCommand::SetPhysicsRate { hz } => i.rate = hz,
+            LiveCommand::SetLatency { seconds } => i.latency = seconds,
+        }
+        Ok(())
+    }
+}
+
+/// `a − b` wrapped to (−π, π].
+fn angle_diff(a: f64, b: f64) -> f64 {
+    let d = (a - b).rem_euclid(std::f64::consts::TAU);
+    if d > std::f64::consts::PI {
+        d - std::f64::consts::TAU
+    } else {
+        d
+    }
+}

@@ -1,0 +1,133 @@
+//! `echothigh view`: the trainee's web viewer (issue 8). Starts the live
+//! simulation in-process (buffer mode by default) and a local web server that
+//! serves the embedded page and streams the state over a WebSocket: the 3D
+//! thigh deforming under the probe, the device and proxy markers, the force
+//! (rendered and physics, paper Fig. 4), the echographic image, the status,
+//! and an exam mode whose answer stays on the server.
+//!
+//! Loopback only unless `--allow-remote`: the page drives the simulator.
+
+mod assets;
+mod exam;
+#[cfg(test)]
+mod fake;
+pub mod protocol;
+mod server;
+#[cfg(test)]
+mod tests;
+
+use anyhow::{bail, Context, Result};
+use echothigh_runtime::live::LiveControl;
+use echothigh_runtime::live_system::LiveSystem;
+use echothigh_runtime::scenario::Scenario;
+use std::io::Write;
+use std::net::{IpAddr, Ipv4Addr, SocketAddr};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+pub use server::ServerConfig;
+
+/// Arguments of `echothigh view`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Scenario TOML (defaults built in when absent).
+    #[arg(long)]
+    pub scenario: Option<PathBuf>,
+    /// TCP port; 0 picks a free one (the URL printed says which).
+    #[arg(long, default_value_t = 8080)]
+    pub port: u16,
+    /// Address to bind; only loopback unless `--allow-remote`.
+    #[arg(long, default_value_t = IpAddr::V4(Ipv4Addr::LOCALHOST))]
+    pub bind: IpAddr,
+    /// Allow binding a non-loopback address (anyone who reaches it drives the simulator).
+    #[arg(long)]
+    pub allow_remote: bool,
+    /// Rate at which the page receives the state (Hz, 1..=120).
+    #[arg(long, default_value_t = 40.0)]
+    pub rate: f64,
+}
+
+/// Refuses a non-loopback `bind` unless `allow_remote`.
+pub fn check_bind(bind: IpAddr, allow_remote: bool) -> Result<()> {
+    if !bind.is_loopback() && !allow_remote {
+        bail!("--bind {bind} is not a loopback address; pass --allow-remote to serve other hosts");
+    }
+    Ok(())
+}
+
+/// Checks the state push rate (Hz).
+pub fn check_rate(rate: f64) -> Result<()> {
+    if !(rate.is_finite() && (1.0..=120.0).contains(&rate)) {
+        bail!("--rate {rate} is out of range [1, 120] Hz");
+    }
+    Ok(())
+}
+
+/// The URL a browser opens for a server bound at `addr`.
+pub fn url(addr: SocketAddr) -> String {
+    format!("http://{addr}/")
+}
+
+/// Runs the viewer until Ctrl-C: starts the live system (`runtime::live_system`)
+/// from the scenario, serves it, and stops its threads on the way out.
+pub fn run(args: Args) -> Result<()> {
+    check_bind(args.bind, args.allow_remote)?;
+    check_rate(args.rate)?;
+    let scenario = Scenario::load(args.scenario.as_deref())?;
+    let system = LiveSystem::start(scenario).context("starting the live simulation")?;
+    let control: Arc<dyn LiveControl> = system.clone();
+    let config = ServerConfig {
+        state_rate: args.rate,
+    };
+    let addr = SocketAddr::new(args.bind, args.port);
+    let served = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .context("starting the web server's async runtime")
+        .and_then(|rt| rt.block_on(serve(control, addr, config, shutdown_signal())));
+    system.shutdown();
+    served
+}
+
+/// Resolves on Ctrl-C (or if the signal cannot be installed, never).
+async fn shutdown_signal() {
+    if tokio::signal::ctrl_c().await.is_err() {
+        std::future::pending::<()>().await;
+    }
+}
+
+/// Binds `addr`, prints the URL on stdout, and serves until `shutdown` resolves.
+pub async fn serve(
+    control: Arc<dyn LiveControl>,
+    addr: SocketAddr,
+    config: ServerConfig,
+    shutdown: impl std::future::Future<Output = ()> + Send + 'static,
+) -> Result<()> {
+    let listener = tokio::net::TcpListener::bind(addr)
+        .await
+        .with_context(|| format!("binding {addr}"))?;
+    let local = listener.local_addr().context("reading the bound address")?;
+    let mut stdout = std::io::stdout();
+    writeln!(stdout, "echothigh viewer: {}", url(local))?;
+    stdout.flush()?;
+    tracing::info!(url = %url(local), "viewer serving");
+    serve_on(listener, control, config, shutdown).await
+}
+
+/// Serves on an already bound `listener` until `shutdown` resolves.
+pub async fn serve_on(
+    listener: tokio::net::TcpListener,
+    control: Arc<dyn LiveControl>,
+    config: ServerConfig,
+    shutdown: impl std::future::Future<Output = ()> + Send + 'static,
+) -> Result<()> {
+    let state = Arc::new(server::AppState::new(
+        control,
+        exam::ExamSession::from_entropy(),
+        config,
+    ));
+    axum::serve(listener, server::router(state))
+        .with_graceful_shutdown(shutdown)
+        .await
+        .context("serving the viewer")
+}

@@ -1,0 +1,398 @@
+//! The viewer's WebSocket protocol, version [`PROTOCOL_VERSION`].
+//!
+//! Server → page:
+//! - text frames: one JSON [`Envelope`] (`{"v": 1, "type": "...", ...}`), typed
+//!   by the serde tag `type`: [`ServerMessage::Hello`] once per connection
+//!   (mesh topology), [`ServerMessage::State`] at the push rate,
+//!   [`ServerMessage::Error`] when a page message is refused;
+//! - binary frames: a 16-byte [`FrameHeader`] then a payload, little-endian:
+//!   [`FrameKind::Image`] (8-bit grayscale echographic frame, `a × b` =
+//!   width × height, row-major, axial rows) and [`FrameKind::Surface`] (`a` =
+//!   node count; `3a` f32 positions in m, then `a` f32 compressions in 0..1).
+//!
+//! Page → server: text frames holding one JSON object, either a
+//! [`LiveCommand`] (forwarded to the runtime) or a [`ViewerCommand`] (exam
+//! mode, handled by the server). [`decode_client`] refuses anything else —
+//! wrong types, unknown fields, non-finite or out-of-range numbers, binary
+//! frames, oversized text — with a [`ProtocolError`] naming the field; the
+//! connection stays up.
+//!
+//! Units: SI (m, N, s, Hz), thigh frame (z along the axis, y anterior).
+
+use echothigh_runtime::live::{LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, VeinKind};
+use serde::{Deserialize, Serialize};
+
+/// Version carried by every JSON envelope and binary frame header.
+pub const PROTOCOL_VERSION: u32 = 1;
+
+/// Largest accepted page message (bytes). Commands are a few dozen bytes.
+pub const MAX_CLIENT_MESSAGE: usize = 4096;
+
+/// Largest press depth a page may ask for (m): the tissue above the femur is
+/// ~40 mm thick (`DESIGN.md` §5), so anything deeper is a bad message.
+pub const MAX_DEPTH: f64 = 0.05;
+
+/// Largest probe tilt about the thigh axis a page may ask for (rad, 45°).
+pub const MAX_TILT: f64 = std::f64::consts::FRAC_PI_4;
+
+/// Largest |z| a page may ask for (m); the runtime checks the thigh's own length.
+pub const MAX_AXIAL: f64 = 1.0;
+
+/// Physics rate range accepted by [`LiveCommand::SetPhysicsRate`] (Hz).
+pub const PHYSICS_RATE_RANGE: (f64, f64) = (10.0, 1000.0);
+
+/// Added latency range accepted by [`LiveCommand::SetLatency`] (s).
+pub const LATENCY_RANGE: (f64, f64) = (0.0, 0.2);
+
+/// A server → page JSON message with its protocol version.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct Envelope {
+    /// Protocol version, [`PROTOCOL_VERSION`].
+    pub v: u32,
+    /// The message, tagged by `type`.
+    #[serde(flatten)]
+    pub body: ServerMessage,
+}
+
+impl Envelope {
+    /// Wraps `body` with the current protocol version.
+    pub fn new(body: ServerMessage) -> Self {
+        Self {
+            v: PROTOCOL_VERSION,
+            body,
+        }
+    }
+}
+
+/// Server → page JSON messages.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+#[allow(clippy::large_enum_variant)] // sent one at a time, never stored in bulk
+pub enum ServerMessage {
+    /// First message of a connection.
+    Hello {
+        /// Surface mesh topology and rest positions (m).
+        mesh: LiveMesh,
+        /// Rate at which state is pushed (Hz).
+        state_rate: f64,
+    },
+    /// Latest live state (the surface geometry follows as a binary frame).
+    State(ViewState),
+    /// A page message was refused; the connection stays up.
+    Error {
+        /// What was wrong, naming the field.
+        message: String,
+    },
+}
+
+/// A live state as the page shows it: the runtime's scalar state, flattened
+/// (its fields sit at the top level of the JSON message, next to `vein` and
+/// `exam`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct ViewState {
+    /// Time, probe, forces, rates and settings, with every number finite.
+    #[serde(flatten)]
+    pub status: LiveStatus,
+    /// Vein state; `None` while an exam question hides it.
+    pub vein: Option<VeinKind>,
+    /// Exam session.
+    pub exam: ExamStatus,
+}
+
+impl ViewState {
+    /// The scalar state of `snap`, sanitized ([`LiveStatus::sanitized`]: a
+    /// non-finite value becomes 0, so the page never sees NaN); `vein` and
+    /// `exam` come from the server.
+    pub fn from_snapshot(snap: &LiveSnapshot, vein: Option<VeinKind>, exam: ExamStatus) -> Self {
+        Self {
+            status: snap.status.sanitized(),
+            vein,
+            exam,
+        }
+    }
+}
+
+/// The exam session as the page may see it: never the hidden vein state.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct ExamStatus {
+    /// A question is open: the vein state is hidden and an answer is awaited.
+    pub open: bool,
+    /// Questions started in this session.
+    pub question: u32,
+    /// Peak contact force on the thigh since the open question started (N).
+    pub peak_force: f64,
+    /// Questions answered in this session.
+    pub answered: u32,
+    /// Questions answered correctly in this session.
+    pub correct: u32,
+    /// The last answered question, with its truth revealed.
+    pub last: Option<ExamResult>,
+}
+
+/// The outcome of one answered exam question.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ExamResult {
+    /// Question number.
+    pub question: u32,
+    /// The trainee's answer: the vein is compressible.
+    pub answered_compressible: bool,
+    /// The hidden vein state, revealed once answered.
+    pub truth: VeinKind,
+    /// Whether the answer was right (only a healthy vein is compressible).
+    pub correct: bool,
+    /// Peak contact force used during the question (N).
+    pub peak_force: f64,
+}
+
+/// The viewer's own page → server commands (exam mode).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[allow(clippy::enum_variant_names)] // the wire names are `exam_*`
+pub enum ViewerCommand {
+    /// Draw a vein state at random, hide it, reset the tissue, open a question.
+    ExamStart,
+    /// Answer the open question.
+    ExamAnswer {
+        /// The trainee judges the vein compressible (healthy).
+        compressible: bool,
+    },
+    /// Leave exam mode (an open question is dropped unscored).
+    ExamStop,
+}
+
+/// A decoded, validated page message.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ClientMessage {
+    /// Forward to the runtime.
+    Live(LiveCommand),
+    /// Handled by the viewer server.
+    Viewer(ViewerCommand),
+}
+
+/// Why a page message was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ProtocolError {
+    /// More than [`MAX_CLIENT_MESSAGE`] bytes.
+    #[error("message of {0} bytes exceeds the limit of {MAX_CLIENT_MESSAGE} bytes")]
+    TooLong(usize),
+    /// A binary frame, which pages never send.
+    #[error("binary messages are not accepted; send JSON text")]
+    Binary,
+    /// Not JSON, not an object, or without a string `type`.
+    #[error("malformed message: {0}")]
+    Malformed(String),
+    /// JSON of the wrong shape for its `type` (unknown type or field, wrong type).
+    #[error("invalid `{kind}` message: {reason}")]
+    Invalid {
+        /// The message's `type`.
+        kind: String,
+        /// The decoder's explanation.
+        reason: String,
+    },
+    /// A number that is not finite or out of its range.
+    #[error("`{field}` = {value} is out of range [{min}, {max}]")]
+    OutOfRange {
+        /// `type.field`, e.g. `probe.depth`.
+        field: &'static str,
+        /// The value received.
+        value: f64,
+        /// Smallest accepted value.
+        min: f64,
+        /// Largest accepted value.
+        max: f64,
+    },
+}
+
+/// Decodes and validates one page text message.
+pub fn decode_client(text: &str) -> Result<ClientMessage, ProtocolError> {
+    if text.len() > MAX_CLIENT_MESSAGE {
+        return Err(ProtocolError::TooLong(text.len()));
+    }
+    let value: serde_json::Value =
+        serde_json::from_str(text).map_err(|e| ProtocolError::Malformed(e.to_string()))?;
+    let kind = value
+        .as_object()
+        .ok_or_else(|| ProtocolError::Malformed("expected a JSON object".into()))?
+        .get("type")
+        .and_then(|t| t.as_str())
+        .ok_or_else(|| ProtocolError::Malformed("missing string field `type`".into()))?
+        .to_owned();
+    let invalid = |e: serde_json::Error| ProtocolError::Invalid {
+        kind: kind.clone(),
+        reason: e.to_string(),
+    };
+    let (msg, known) = if kind.starts_with("exam_") {
+        let cmd: ViewerCommand = serde_json::from_value(value.clone()).map_err(invalid)?;
+        (ClientMessage::Viewer(cmd), serde_json::to_value(cmd))
+    } else {
+        let cmd: LiveCommand = serde_json::from_value(value.clone()).map_err(invalid)?;
+        let known = serde_json::to_value(&cmd);
+        (ClientMessage::Live(cmd), known)
+    };
+    // serde's `deny_unknown_fields` does not cover the unit variants of an
+    // internally tagged enum (`{"type":"reset","now":1}` would pass): every
+    // key received must also appear when the decoded message is encoded.
+    let known = known.map_err(|e| ProtocolError::Malformed(e.to_string()))?;
+    if let (Some(received), Some(known)) = (value.as_object(), known.as_object()) {
+        if let Some(extra) = received.keys().find(|k| !known.contains_key(*k)) {
+            return Err(ProtocolError::Invalid {
+                kind,
+                reason: format!("unknown field `{extra}`"),
+            });
+        }
+    }
+    validate(&msg)?;
+    Ok(msg)
+}
+
+/// Checks that `value` is finite and within `[min, max]`.
+fn check(field: &'static str, value: f64, min: f64, max: f64) -> Result<(), ProtocolError> {
+    if value.is_finite() && (min..=max).contains(&value) {
+        Ok(())
+    } else {
+        Err(ProtocolError::OutOfRange {
+            field,
+            value,
+            min,
+            max,
+        })
+    }
+}
+
+/// Range checks of the numbers a page may send (the runtime checks again
+/// against the scenario, e.g. the thigh's length).
+fn validate(msg: &ClientMessage) -> Result<(), ProtocolError> {
+    use std::f64::consts::TAU;
+    match *msg {
+        ClientMessage::Live(LiveCommand::Probe {
+            theta,
+            z,
+            depth,
+            tilt,
+        }) => {
+            check("probe.theta", theta, -TAU, TAU)?;
+            check("probe.z", z, -MAX_AXIAL, MAX_AXIAL)?;
+            check("probe.depth", depth, 0.0, MAX_DEPTH)?;
+            check("probe.tilt", tilt, -MAX_TILT, MAX_TILT)
+        }
+        ClientMessage::Live(LiveCommand::SetPhysicsRate { hz }) => check(
+            "set_physics_rate.hz",
+            hz,
+            PHYSICS_RATE_RANGE.0,
+            PHYSICS_RATE_RANGE.1,
+        ),
+        ClientMessage::Live(LiveCommand::SetLatency { seconds }) => check(
+            "set_latency.seconds",
+            seconds,
+            LATENCY_RANGE.0,
+            LATENCY_RANGE.1,
+        ),
+        _ => Ok(()),
+    }
+}
+
+/// Kind of a binary server → page frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[repr(u8)]
+pub enum FrameKind {
+    /// Echographic image: `a` = width, `b` = height, then `a·b` bytes.
+    Image = 1,
+    /// Deformed surface: `a` = node count, `b` = 0, then `3a` f32 positions
+    /// (m) and `a` f32 compressions (fraction of the asymptote, 0..1).
+    Surface = 2,
+}
+
+/// Magic bytes opening every binary frame.
+pub const FRAME_MAGIC: [u8; 4] = *b"ETHV";
+
+/// Size of [`FrameHeader`] in bytes (a multiple of 4, so f32 payloads align).
+pub const FRAME_HEADER_LEN: usize = 16;
+
+/// The 16-byte header of a binary frame: magic, version (u8), kind (u8), two
+/// reserved zero bytes, then `a` and `b` (u32, little-endian).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FrameHeader {
+    /// Frame kind.
+    pub kind: FrameKind,
+    /// First size field (see [`FrameKind`]).
+    pub a: u32,
+    /// Second size field (see [`FrameKind`]).
+    pub b: u32,
+}
+
+impl FrameHeader {
+    /// Appends the header's 16 bytes to `out`.
+    pub fn write(&self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&FRAME_MAGIC);
+        out.push(PROTOCOL_VERSION as u8);
+        out.push(self.kind as u8);
+        out.extend_from_slice(&[0, 0]);
+        out.extend_from_slice(&self.a.to_le_bytes());
+        out.extend_from_slice(&self.b.to_le_bytes());
+    }
+
+    /// Parses a header and checks that the payload length matches it.
+    #[allow(dead_code)] // the page parses frames in JS; this parser serves the tests
+    pub fn parse(frame: &[u8]) -> Option<(FrameHeader, &[u8])> {
+        let head = frame.get(..FRAME_HEADER_LEN)?;
+        if head[..4] != FRAME_MAGIC || u32::from(head[4]) != PROTOCOL_VERSION {
+            return None;
+        }
+        let kind = match head[5] {
+            1 => FrameKind::Image,
+            2 => FrameKind::Surface,
+            _ => return None,
+        };
+        let a = u32::from_le_bytes(head[8..12].try_into().ok()?);
+        let b = u32::from_le_bytes(head[12..16].try_into().ok()?);
+        let payload = &frame[FRAME_HEADER_LEN..];
+        let expected = match kind {
+            FrameKind::Image => a as usize * b as usize,
+            FrameKind::Surface => a as usize * 16,
+        };
+        (payload.len() == expected).then_some((FrameHeader { kind, a, b }, payload))
+    }
+}
+
+/// Encodes an image frame (`pixels` is `width × height`, row-major) into
+/// `out`. A buffer shorter than `width × height` is sent as an empty 0×0 frame.
+pub fn encode_image(width: u32, height: u32, pixels: &[u8], out: &mut Vec<u8>) {
+    out.clear();
+    let n = width as usize * height as usize;
+    out.reserve(FRAME_HEADER_LEN + n);
+    let (a, b, body) = match pixels.get(..n) {
+        Some(body) => (width, height, body),
+        None => (0, 0, &[][..]),
+    };
+    FrameHeader {
+        kind: FrameKind::Image,
+        a,
+        b,
+    }
+    .write(out);
+    out.extend_from_slice(body);
+}
+
+/// Encodes the deformed surface of `snap` into `out`. Non-finite values are
+/// sent as 0 so the page never receives NaN; the node count is the shorter of
+/// the positions and compressions.
+pub fn encode_surface(snap: &LiveSnapshot, out: &mut Vec<u8>) {
+    out.clear();
+    let n = snap.positions.len().min(snap.compression.len());
+    out.reserve(FRAME_HEADER_LEN + 16 * n);
+    FrameHeader {
+        kind: FrameKind::Surface,
+        a: n as u32,
+        b: 0,
+    }
+    .write(out);
+    let finite = |x: f32| if x.is_finite() { x } else { 0.0 };
+    for p in &snap.positions[..n] {
+        for c in p {
+            out.extend_from_slice(&finite(*c).to_le_bytes());
+        }
+    }
+    for c in &snap.compression[..n] {
+        out.extend_from_slice(&finite(*c).to_le_bytes());
+    }
+}

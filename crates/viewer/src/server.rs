@@ -1,0 +1,235 @@
+//! The viewer's web server: the embedded page and the `/ws` WebSocket.
+//!
+//! One task per connection pushes the live state at [`ServerConfig::state_rate`]
+//! (JSON scalars, the deformed surface and — when a new one exists — the
+//! echographic image as binary frames, see [`super::protocol`]) and applies
+//! the page's commands. The exam session is shared by all connections and
+//! lives only here, so the hidden vein state never reaches the page before it
+//! is answered.
+
+use super::assets;
+use super::exam::ExamSession;
+use super::protocol::{
+    decode_client, encode_image, encode_surface, ClientMessage, Envelope, ServerMessage, ViewState,
+    ViewerCommand,
+};
+use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
+use axum::extract::State;
+use axum::http::{header, HeaderMap, StatusCode, Uri};
+use axum::response::{IntoResponse, Response};
+use axum::routing::get;
+use axum::Router;
+use echothigh_runtime::live::{LiveCommand, LiveControl, LiveSnapshot};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::Duration;
+
+/// Server settings.
+#[derive(Debug, Clone, Copy)]
+pub struct ServerConfig {
+    /// Rate at which each connection receives the state (Hz, 1..=120).
+    pub state_rate: f64,
+}
+
+impl Default for ServerConfig {
+    fn default() -> Self {
+        Self { state_rate: 40.0 }
+    }
+}
+
+/// What every connection shares.
+pub struct AppState {
+    control: Arc<dyn LiveControl>,
+    exam: Mutex<ExamSession>,
+    config: ServerConfig,
+}
+
+impl AppState {
+    /// Wraps the live system; `exam` holds the trainee's session.
+    pub fn new(control: Arc<dyn LiveControl>, exam: ExamSession, config: ServerConfig) -> Self {
+        Self {
+            control,
+            exam: Mutex::new(exam),
+            config,
+        }
+    }
+
+    /// The exam session (a poisoned lock is recovered: the session is plain data).
+    fn exam(&self) -> MutexGuard<'_, ExamSession> {
+        self.exam.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Applies one decoded page message; `Err` is the text sent back to the page.
+    fn apply(&self, msg: ClientMessage) -> Result<(), String> {
+        match msg {
+            ClientMessage::Live(LiveCommand::SetVein { .. }) if self.exam().is_open() => {
+                Err("the vein state is hidden during an exam question: answer it or leave the exam first".into())
+            }
+            ClientMessage::Live(cmd) => self.control.command(cmd),
+            ClientMessage::Viewer(ViewerCommand::ExamStart) => {
+                let mut exam = self.exam();
+                let vein = exam.start();
+                let applied = self
+                    .control
+                    .command(LiveCommand::SetVein { vein })
+                    .and_then(|()| self.control.command(LiveCommand::Reset));
+                if let Err(e) = applied {
+                    exam.stop();
+                    return Err(format!("could not start the exam question: {e}"));
+                }
+                Ok(())
+            }
+            ClientMessage::Viewer(ViewerCommand::ExamAnswer { compressible }) => {
+                self.exam().answer(compressible).map(|_| ()).map_err(|e| e.to_string())
+            }
+            ClientMessage::Viewer(ViewerCommand::ExamStop) => {
+                self.exam().stop();
+                Ok(())
+            }
+        }
+    }
+
+    /// Builds the state message from `snap`, recording the force for the exam.
+    fn view_state(&self, snap: &LiveSnapshot) -> ViewState {
+        let [x, y, z] = snap.status.physics_force;
+        let mut exam = self.exam();
+        exam.observe_force((x * x + y * y + z * z).sqrt());
+        let vein = (!exam.is_open()).then(|| self.control.vein());
+        ViewState::from_snapshot(snap, vein, exam.status())
+    }
+}
+
+/// The routes: `/ws` and the embedded files.
+pub fn router(state: Arc<AppState>) -> Router {
+    Router::new()
+        .route("/ws", get(ws_upgrade))
+        .fallback(get(serve_asset))
+        .with_state(state)
+}
+
+/// Serves an embedded file, or 404.
+async fn serve_asset(uri: Uri) -> Response {
+    match assets::lookup(uri.path()) {
+        Some(a) => (
+            [
+                (header::CONTENT_TYPE, a.content_type),
+                (header::CACHE_CONTROL, "no-cache"),
+                (header::X_CONTENT_TYPE_OPTIONS, "nosniff"),
+            ],
+            a.body,
+        )
+            .into_response(),
+        None => (StatusCode::NOT_FOUND, "not found").into_response(),
+    }
+}
+
+/// Whether a browser's `Origin` is this server (blocks other web sites from
+/// driving the simulator through the trainee's browser). Clients that send
+/// no `Origin` (not browsers) are allowed.
+pub fn same_origin(headers: &HeaderMap) -> bool {
+    let Some(origin) = headers.get(header::ORIGIN) else {
+        return true;
+    };
+    let host = headers.get(header::HOST).and_then(|h| h.to_str().ok());
+    match (origin.to_str().ok(), host) {
+        (Some(origin), Some(host)) => {
+            origin
+                .strip_prefix("http://")
+                .or_else(|| origin.strip_prefix("https://"))
+                == Some(host)
+        }
+        _ => false,
+    }
+}
+
+async fn ws_upgrade(
+    ws: WebSocketUpgrade,
+    headers: HeaderMap,
+    State(app): State<Arc<AppState>>,
+) -> Response {
+    if !same_origin(&headers) {
+        return (StatusCode::FORBIDDEN, "cross-origin WebSocket refused").into_response();
+    }
+    ws.max_message_size(64 * 1024)
+        .on_upgrade(move |socket| session(socket, app))
+}
+
+/// Serialises a server message (serialising these types cannot fail).
+fn json(body: ServerMessage) -> Message {
+    let text = serde_json::to_string(&Envelope::new(body))
+        .unwrap_or_else(|e| format!(r#"{{"v":1,"type":"error","message":"encoding: {e}"}}"#));
+    Message::Text(Utf8Bytes::from(text))
+}
+
+/// One connection: hello, then state pushes and commands until it closes.
+async fn session(mut socket: WebSocket, app: Arc<AppState>) {
+    let hello = ServerMessage::Hello {
+        mesh: app.control.mesh(),
+        state_rate: app.config.state_rate,
+    };
+    if socket.send(json(hello)).await.is_err() {
+        return;
+    }
+    let period = Duration::from_secs_f64(1.0 / app.config.state_rate.clamp(1.0, 120.0));
+    let mut tick = tokio::time::interval(period);
+    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+    let mut snap = LiveSnapshot::default();
+    let mut pixels = Vec::new();
+    let mut last_frame = None;
+    loop {
+        let outgoing: Vec<Message> = tokio::select! {
+            incoming = socket.recv() => match incoming {
+                None | Some(Err(_)) | Some(Ok(Message::Close(_))) => break,
+                Some(Ok(Message::Text(text))) => reply(&app, decode_client(text.as_str())),
+                Some(Ok(Message::Binary(_))) => {
+                    reply(&app, Err(super::protocol::ProtocolError::Binary))
+                }
+                Some(Ok(Message::Ping(_) | Message::Pong(_))) => Vec::new(),
+            },
+            _ = tick.tick() => push(&app, &mut snap, &mut pixels, &mut last_frame),
+        };
+        for m in outgoing {
+            if socket.send(m).await.is_err() {
+                return;
+            }
+        }
+    }
+}
+
+/// The reply to a page message: nothing, or an error message.
+fn reply(
+    app: &AppState,
+    decoded: Result<ClientMessage, super::protocol::ProtocolError>,
+) -> Vec<Message> {
+    let outcome = decoded
+        .map_err(|e| e.to_string())
+        .and_then(|msg| app.apply(msg));
+    match outcome {
+        Ok(()) => Vec::new(),
+        Err(message) => {
+            tracing::debug!(%message, "refused a page message");
+            vec![json(ServerMessage::Error { message })]
+        }
+    }
+}
+
+/// The messages of one state push: scalars, surface and a new image if any.
+fn push(
+    app: &AppState,
+    snap: &mut LiveSnapshot,
+    pixels: &mut Vec<u8>,
+    last_frame: &mut Option<u64>,
+) -> Vec<Message> {
+    app.control.snapshot(snap);
+    let mut out = vec![json(ServerMessage::State(app.view_state(snap)))];
+    let mut surface = Vec::new();
+    encode_surface(snap, &mut surface);
+    out.push(Message::Binary(surface.into()));
+    let (w, h, frame) = app.control.image(pixels);
+    if *last_frame != Some(frame) && w > 0 && h > 0 {
+        *last_frame = Some(frame);
+        let mut image = Vec::new();
+        encode_image(w, h, pixels, &mut image);
+        out.push(Message::Binary(image.into()));
+    }
+    out
+}

@@ -1,0 +1,78 @@
+//! The state message as the page receives it: the top-level keys are the
+//! ones the embedded scripts read, and the text is pinned byte for byte.
+
+use super::super::protocol::{Envelope, ServerMessage};
+use super::protocol::sample_state;
+
+/// Top-level keys of a state message that the page reads: `msg.v` and
+/// `msg.type` in `app.js`'s `onJson`, the rest as `s.<key>` in `onState`,
+/// `syncControls` (app.js), `showStatus` (panels.js) and `updateState`
+/// (scene.js).
+const PAGE_STATE_KEYS: [&str; 20] = [
+    "v",
+    "type",
+    "time",
+    "probe_position",
+    "probe_orientation",
+    "device",
+    "proxy",
+    "rendered_force",
+    "physics_force",
+    "max_force",
+    "physics_rate",
+    "haptic_rate",
+    "missed_deadlines",
+    "model_age",
+    "mode",
+    "physics_rate_setting",
+    "latency_setting",
+    "exam_playing",
+    "vein",
+    "exam",
+];
+
+#[test]
+fn state_message_top_level_keys_are_the_ones_the_page_reads() {
+    use std::collections::BTreeSet;
+    let value = serde_json::to_value(Envelope::new(ServerMessage::State(sample_state()))).unwrap();
+    let sent: BTreeSet<&str> = value
+        .as_object()
+        .unwrap()
+        .keys()
+        .map(String::as_str)
+        .collect();
+    let page: BTreeSet<&str> = PAGE_STATE_KEYS.into_iter().collect();
+    assert_eq!(sent, page);
+    // The list is the page's: each key is read by the embedded scripts.
+    let js: String = crate::assets::ASSETS
+        .iter()
+        .filter(|a| a.path.ends_with(".js") && !a.path.contains("vendor"))
+        .map(|a| String::from_utf8_lossy(a.body).into_owned())
+        .collect();
+    for key in PAGE_STATE_KEYS {
+        let read = [format!("msg.{key}"), format!("s.{key}")];
+        assert!(
+            read.iter().any(|r| js.contains(r.as_str())),
+            "the page never reads `{key}`"
+        );
+    }
+}
+
+#[test]
+fn state_json_is_unchanged_byte_for_byte() {
+    // The exact text the page received before `ViewState` flattened
+    // `LiveStatus`: same keys, same nesting, same order.
+    let expected = concat!(
+        r#"{"v":1,"type":"state","time":1.25,"probe_position":[0.0,0.07,0.01],"#,
+        r#""probe_orientation":[1.0,0.0,0.0,0.0],"device":[0.0,0.0,0.0],"#,
+        r#""proxy":[0.0,0.0,0.0],"rendered_force":[0.0,4.5,0.0],"#,
+        r#""physics_force":[0.0,4.0,0.1],"max_force":30.0,"physics_rate":98.0,"#,
+        r#""haptic_rate":1000.0,"missed_deadlines":3,"model_age":0.012,"mode":"hold","#,
+        r#""physics_rate_setting":100.0,"latency_setting":0.02,"exam_playing":true,"#,
+        r#""vein":"acute","exam":{"open":false,"question":2,"peak_force":0.0,"#,
+        r#""answered":2,"correct":1,"last":{"question":2,"answered_compressible":true,"#,
+        r#""truth":"chronic","correct":false,"peak_force":12.5}}}"#
+    );
+    let text = serde_json::to_string(&Envelope::new(ServerMessage::State(sample_state()))).unwrap();
+    assert_eq!(text, expected);
+}
