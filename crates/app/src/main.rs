@@ -35,6 +35,8 @@ enum Command {
     /// Experiments: the paper's Fig. 4 and the rate, latency and damping sweeps.
     #[command(subcommand)]
     Experiment(echothigh::experiment::ExperimentCommand),
+    /// The transverse section of the 3D leg anatomy under a probe (JSON or table).
+    Anatomy(cmd::anatomy::Args),
     /// The trainee's live web viewer (3D thigh, probe, image, force, exam mode).
     View(view::Args),
 }
@@ -56,6 +58,7 @@ fn main() -> std::process::ExitCode {
         Command::Image(a) => cmd::image::run(a),
         Command::Experiment(c) => echothigh::experiment::run(c),
         Command::View(a) => view::run(a),
+        Command::Anatomy(a) => cmd::anatomy::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
