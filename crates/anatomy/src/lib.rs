@@ -36,6 +36,7 @@ pub mod levels;
 pub mod patient;
 pub mod section;
 pub mod structure;
+pub mod tables;
 pub mod vessels;
 
 pub use anatomy::{cut_tube, Anatomy};

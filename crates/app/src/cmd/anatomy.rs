@@ -107,7 +107,10 @@ pub fn run(args: Args) -> Result<()> {
             anatomy.patient().name,
             section.fascia_depth * 1e3
         );
-        println!("{:<11} {:<17} {:>9} {:>11} {:>15}", "id", "kind", "depth_mm", "lateral_mm", "radii_mm");
+        println!(
+            "{:<11} {:<17} {:>9} {:>11} {:>15}",
+            "id", "kind", "depth_mm", "lateral_mm", "radii_mm"
+        );
         for x in &out.structures {
             println!(
                 "{:<11} {:<17} {:>9.1} {:>11.1} {:>7.1} {:>7.1}",
