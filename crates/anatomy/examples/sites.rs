@@ -1,5 +1,7 @@
-//! Prints the section at every exam site for every preset
-//! (`cargo run -p echothigh-anatomy --example sites`).
+//! Prints the section at every exam site for every preset, then the wall
+//! time of one `Anatomy::section` call at mid-thigh (median of 9 batches of
+//! 200 calls; an indication for the imaging thread, not a benchmark)
+//! (`cargo run -p echothigh-anatomy --example sites`; the dev profile builds this crate at opt-level 3).
 
 use echothigh_anatomy::{Anatomy, Patient, Site, PRESETS};
 
@@ -30,5 +32,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
     }
+    let a = Anatomy::new(Patient::preset("lean-male")?)?;
+    let pose = a.site_pose(Site::FvMid);
+    let mut batches: Vec<f64> = (0..9)
+        .map(|_| {
+            let t = std::time::Instant::now();
+            for _ in 0..200 {
+                std::hint::black_box(a.section(std::hint::black_box(&pose)).unwrap());
+            }
+            t.elapsed().as_secs_f64() / 200.0
+        })
+        .collect();
+    batches.sort_by(f64::total_cmp);
+    println!(
+        "section() at fv-mid: median {:.1} µs per call",
+        batches[4] * 1e6
+    );
     Ok(())
 }

@@ -27,7 +27,14 @@ fn ids(v: &serde_json::Value) -> Vec<String> {
 
 #[test]
 fn json_has_exactly_the_documented_shape_at_every_site() {
-    for site in ["cfv", "sfj", "fv-proximal", "fv-mid", "fv-distal", "popliteal"] {
+    for site in [
+        "cfv",
+        "sfj",
+        "fv-proximal",
+        "fv-mid",
+        "fv-distal",
+        "popliteal",
+    ] {
         let (ok, stdout, stderr) = run(&["--site", site, "--json"]);
         assert!(ok, "{site}: {stderr}");
         let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
@@ -38,7 +45,11 @@ fn json_has_exactly_the_documented_shape_at_every_site() {
         for x in v["structures"].as_array().unwrap() {
             let mut keys: Vec<&String> = x.as_object().unwrap().keys().collect();
             keys.sort();
-            assert_eq!(keys, ["depth_mm", "id", "kind", "lateral_mm", "radii_mm"], "{site}");
+            assert_eq!(
+                keys,
+                ["depth_mm", "id", "kind", "lateral_mm", "radii_mm"],
+                "{site}"
+            );
             let r = x["radii_mm"].as_array().unwrap();
             assert_eq!(r.len(), 2);
             assert!(r.iter().all(|a| a.as_f64().unwrap() > 0.0));
@@ -52,7 +63,12 @@ fn json_has_exactly_the_documented_shape_at_every_site() {
     // present only at the popliteal site.
     let (_, mid, _) = run(&["--site", "fv-mid", "--json"]);
     let v: serde_json::Value = serde_json::from_str(mid.trim()).unwrap();
-    let fv = v["structures"].as_array().unwrap().iter().find(|x| x["id"] == "fv").unwrap();
+    let fv = v["structures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|x| x["id"] == "fv")
+        .unwrap();
     assert!(fv["lateral_mm"].as_f64().unwrap().abs() < 1e-6);
     assert!(!ids(&v).contains(&"pv".to_string()));
     let (_, pop, _) = run(&["--site", "popliteal", "--json"]);
@@ -65,7 +81,11 @@ fn at_and_angle_and_variants() {
     let dir = std::env::temp_dir().join(format!("echothigh-anatomy-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("dup.toml");
-    std::fs::write(&file, "preset = \"average-female\"\nduplicated_fv = true\nlymph_node = true\n").unwrap();
+    std::fs::write(
+        &file,
+        "preset = \"average-female\"\nduplicated_fv = true\nlymph_node = true\n",
+    )
+    .unwrap();
     let (ok, stdout, stderr) = run(&["--patient", file.to_str().unwrap(), "--at", "185", "--json"]);
     assert!(ok, "{stderr}");
     let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
