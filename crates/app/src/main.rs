@@ -36,6 +36,8 @@ enum Command {
     /// Experiments: the paper's Fig. 4 and the rate, latency and damping sweeps.
     #[command(subcommand)]
     Experiment(echothigh_experiments::ExperimentCommand),
+    /// The transverse section of the 3D leg anatomy under a probe (JSON or table).
+    Anatomy(cmd::anatomy::Args),
     /// The trainee's live web viewer (3D thigh, probe, image, force, exam mode).
     #[cfg(feature = "viewer")]
     View(echothigh_viewer::Args),
@@ -59,6 +61,7 @@ fn main() -> std::process::ExitCode {
         Command::Experiment(c) => echothigh_experiments::run(c),
         #[cfg(feature = "viewer")]
         Command::View(a) => echothigh_viewer::run(a),
+        Command::Anatomy(a) => cmd::anatomy::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -1,5 +1,6 @@
 //! Subcommands other than benchmarks.
 
+pub mod anatomy;
 pub mod calibrate;
 pub mod image;
 pub mod net;
