@@ -37,6 +37,8 @@ enum Command {
     Experiment(echothigh::experiment::ExperimentCommand),
     /// The trainee's live web viewer (3D thigh, probe, image, force, exam mode).
     View(view::Args),
+    /// List the real haptic-device backends: SDK found, devices, limits, or why not.
+    Devices(cmd::devices::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -56,6 +58,7 @@ fn main() -> std::process::ExitCode {
         Command::Image(a) => cmd::image::run(a),
         Command::Experiment(c) => echothigh::experiment::run(c),
         Command::View(a) => view::run(a),
+        Command::Devices(a) => cmd::devices::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,
