@@ -302,7 +302,7 @@ pub extern "C" fn dhdSetForce(fx: f64, fy: f64, fz: f64, _id: c_char) -> c_int {
         return -1;
     }
     let norm = (fx * fx + fy * fy + fz * fz).sqrt();
-    if !(norm <= MAX_FORCE) {
+    if norm.is_nan() || norm > MAX_FORCE {
         s.last_error = DHD_ERROR_INVALID;
         s.commanded = [0.0; 3];
         return -1;

@@ -236,7 +236,7 @@ pub extern "C" fn hdEndFrame(hhd: Hhd) {
     let norm = (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
     if !s.force_output {
         s.arm.motor = [0.0; 3];
-    } else if !(norm <= MAX_FORCE) {
+    } else if norm.is_nan() || norm > MAX_FORCE {
         s.error(HD_EXCEEDED_MAX_FORCE);
         s.arm.motor = [0.0; 3];
     } else {
