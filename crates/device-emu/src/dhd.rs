@@ -430,3 +430,9 @@ pub extern "C" fn echothigh_emu_dhd_max_applied_force() -> f64 {
 pub extern "C" fn echothigh_emu_dhd_watchdog_trips() -> u64 {
     lock(&STATE).watchdog_tripped
 }
+
+/// The watchdog duration set with `dhdSetWatchdog` (multiples of 125 µs; 0 = off).
+#[no_mangle]
+pub extern "C" fn echothigh_emu_dhd_watchdog() -> c_uchar {
+    lock(&STATE).watchdog
+}

@@ -136,3 +136,27 @@ pub fn run_paced(
     }
     start.elapsed().as_secs_f64()
 }
+
+/// Runs `ticks` paced ticks with `force`, then 300 more, and returns the
+/// medians over those 300 of the leg-frame position's y (m) and the rendered
+/// force's y (N). The median rejects the short transients a loaded machine
+/// causes when the OS stalls the tick beyond the watchdog timeout.
+pub fn settled_medians(
+    device: &mut dyn HapticDevice,
+    ticks: usize,
+    force: impl Fn(&dyn HapticDevice) -> echothigh_devices_hw::Vec3,
+) -> (f64, f64) {
+    run_paced(device, ticks, |_, d| force(d));
+    let mut ys = Vec::with_capacity(300);
+    let mut fs = Vec::with_capacity(300);
+    run_paced(device, 300, |_, d| {
+        ys.push(d.position().y);
+        fs.push(d.force().y);
+        force(d)
+    });
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    (median(&mut ys), median(&mut fs))
+}
