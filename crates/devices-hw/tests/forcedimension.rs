@@ -89,16 +89,6 @@ fn handle_motion_and_orientation_arrive_through_the_calibration() {
         "{}",
         dev.info().watchdog
     );
-    // The firmware watchdog is armed at the configured 10 ms: 10 ms / 125 µs = 80.
-    // SAFETY: our emulator; the control's signature is `unsigned char (void)`.
-    let armed = unsafe {
-        let lib = libloading::Library::new(common::emulator_path()).unwrap();
-        let f = *lib
-            .get::<unsafe extern "C" fn() -> u8>(b"echothigh_emu_dhd_watchdog\0")
-            .unwrap();
-        f()
-    };
-    assert_eq!(armed, 80);
     // Critically damped hand on the 0.2 kg arm: k 500 N/m, c 18 N·s/m (+2 of
     // the arm): ζ = 20 / (2 √(500 × 0.2)) = 1.0, 1/ω = 20 ms; 0.6 s is 30 of them.
     emu.set_hand(Some([0.0; 3]), 500.0, 18.0);
@@ -205,6 +195,16 @@ fn stalled_tick_zeroes_force_and_drop_leaves_zero() {
     let _g = serial();
     let emu = emulator();
     let mut dev = open_hardware(KIND, &HardwareConfig::default()).unwrap();
+    // The firmware watchdog is armed at the configured 10 ms: 10 ms / 125 µs = 80.
+    // SAFETY: our emulator; the control's signature is `unsigned char (void)`.
+    let armed = unsafe {
+        let lib = libloading::Library::new(common::emulator_path()).unwrap();
+        let f = *lib
+            .get::<unsafe extern "C" fn() -> u8>(b"echothigh_emu_dhd_watchdog\0")
+            .unwrap();
+        f()
+    };
+    assert_eq!(armed, 80);
     emu.set_hand(Some([0.0, -0.02, 0.0]), 400.0, 16.0);
     run_paced(&mut dev, 700, |_, d| wall(d));
     assert!(norm(emu.applied_force()) > 1.0, "{:?}", emu.applied_force());
