@@ -41,6 +41,8 @@ enum Command {
     /// The trainee's live web viewer (3D thigh, probe, image, force, exam mode).
     #[cfg(feature = "viewer")]
     View(echothigh_viewer::Args),
+    /// List the real haptic-device backends: SDK found, devices, limits, or why not.
+    Devices(cmd::devices::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -62,6 +64,7 @@ fn main() -> std::process::ExitCode {
         #[cfg(feature = "viewer")]
         Command::View(a) => echothigh_viewer::run(a),
         Command::Anatomy(a) => cmd::anatomy::run(a),
+        Command::Devices(a) => cmd::devices::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -52,6 +52,17 @@ pub trait HapticDevice {
     fn advance(&mut self, dt: f64);
     /// Fault counters since construction.
     fn faults(&self) -> DeviceFaults;
+    /// The tool's orientation in the thigh frame (thigh ← tool), where the
+    /// device senses it (a Touch's gimbal, an omega.6/7's wrist); `None` for a
+    /// 3-DoF device, whose probe stays normal to the skin.
+    fn orientation(&self) -> Option<nalgebra::UnitQuaternion<f64>> {
+        None
+    }
+    /// Whether the device is clutched (the user repositions the hand; the
+    /// probe holds still and the force is zero). Simulated devices never are.
+    fn clutched(&self) -> bool {
+        false
+    }
 }
 
 /// Limits a commanded force to `max_force` (N) and rejects non-finite input,

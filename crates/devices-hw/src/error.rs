@@ -1,0 +1,58 @@
+//! Typed errors of the device backends: each names what is missing and how to fix it.
+
+use crate::DeviceKind;
+use echothigh_device::ConfigError;
+
+/// Why a device backend could not start or stopped.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DeviceError {
+    /// The vendor's shared library could not be loaded.
+    #[error("{backend}: cannot load the {sdk} library `{library}` ({detail}); install the {sdk} or set {env_var} to the full path of the library")]
+    LibraryNotFound {
+        /// The backend.
+        backend: DeviceKind,
+        /// The file looked for.
+        library: String,
+        /// The SDK's name.
+        sdk: &'static str,
+        /// The environment variable that overrides the path.
+        env_var: &'static str,
+        /// The loader's message.
+        detail: String,
+    },
+    /// The library lacks a function the backend calls.
+    #[error("{backend}: `{library}` has no function `{symbol}`: it is not a compatible {sdk} library ({detail})")]
+    MissingSymbol {
+        /// The backend.
+        backend: DeviceKind,
+        /// The file loaded.
+        library: String,
+        /// The SDK's name.
+        sdk: &'static str,
+        /// The missing function.
+        symbol: &'static str,
+        /// The loader's message.
+        detail: String,
+    },
+    /// The library loaded but found no device.
+    #[error("{backend}: no device found: {detail}")]
+    NoDevice {
+        /// The backend.
+        backend: DeviceKind,
+        /// The SDK's explanation.
+        detail: String,
+    },
+    /// An SDK call failed.
+    #[error("{backend}: {call} failed: {detail}")]
+    Sdk {
+        /// The backend.
+        backend: DeviceKind,
+        /// The SDK function.
+        call: &'static str,
+        /// The SDK's error text.
+        detail: String,
+    },
+    /// A configuration value is out of range.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+}
