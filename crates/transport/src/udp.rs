@@ -197,15 +197,16 @@ impl UdpServer {
             let bytes = &buf[..n];
             // A pending client's confirmation (or, if that was lost, its
             // first message) in its new session.
-            if let Some(slot) = pending
-                .iter_mut()
-                .find(|p| matches!(p, Some(p) if p.from == from))
-            {
-                let p = slot.as_ref().expect("found as Some");
-                if let Ok(msg) = open(bytes, &p.keys.client_to_server, p.keys.session_id) {
-                    let p = slot.take().expect("found as Some");
-                    return commit(socket, p, msg.seq(), faults, &stats, clock(start));
-                }
+            let confirmed = pending.iter().position(|p| {
+                matches!(p, Some(p) if p.from == from
+                    && open(bytes, &p.keys.client_to_server, p.keys.session_id).is_ok())
+            });
+            if let Some(i) = confirmed {
+                let p = pending[i].take().expect("matched as Some");
+                let seq = open(bytes, &p.keys.client_to_server, p.keys.session_id)
+                    .map(|m| m.seq())
+                    .unwrap_or(0);
+                return commit(socket, p, seq, faults, &stats, clock(start));
             }
             match open(bytes, &hello_key, 0) {
                 Ok(Message::Hello(h)) => {

@@ -102,7 +102,7 @@ pub fn server(args: ServerArgs) -> Result<()> {
     let rate = scenario.coupling.physics_rate;
     let mut link = listener
         .accept(
-            token.0,
+            &token,
             scenario.link_faults().1,
             rate,
             Duration::from_secs_f64(args.accept_timeout),
@@ -152,7 +152,7 @@ pub fn client(args: ClientArgs) -> Result<()> {
     let clock = Clock::start();
     let (link, welcome) = connect(
         args.connect,
-        token.0,
+        &token,
         scenario.link_faults().0,
         Duration::from_secs_f64(args.connect_timeout),
         clock.now(),
