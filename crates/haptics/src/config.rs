@@ -168,10 +168,21 @@ pub struct RenderConfig {
     pub max_force: f64,
     /// Largest rate of change of the rendered force, N/s. Default 2000.
     pub force_rate_limit: f64,
-    /// Model age beyond which the force starts fading, s. Default 0.1.
+    /// Model age beyond which the loss is declared and the force is
+    /// released to zero, s. Default 0.1.
     pub stale_age: f64,
-    /// Time over which a stale model's force fades to zero, s. Default 0.1.
+    /// Time in which the largest force (`max_force`) is released to zero
+    /// once the model is stale, s (positive). It sets the ramp rate
+    /// `max_force / fade_time` (N/s) of the release and of the re-entry
+    /// from zero after it ([`crate::ForceRamp`]). Default 0.1 (200 N/s,
+    /// 0.2 N per 1 ms tick: below the 0.24 N per tick of normal pressing
+    /// reported in issue 20).
     pub fade_time: f64,
+    /// Longest interval between two ticks that the rate limits credit, s
+    /// (positive): a tick that comes later (the loop itself stalled) changes the
+    /// force by at most what this interval allows. Set it to the loop
+    /// period. Default 0.001 (the 1 kHz loop).
+    pub max_tick_interval: f64,
 }
 
 impl Default for RenderConfig {
@@ -186,6 +197,7 @@ impl Default for RenderConfig {
             force_rate_limit: 2000.0,
             stale_age: 0.1,
             fade_time: 0.1,
+            max_tick_interval: 0.001,
         }
     }
 }
@@ -207,7 +219,14 @@ impl RenderConfig {
         positive(prefix, "max_force", self.max_force, false)?;
         positive(prefix, "force_rate_limit", self.force_rate_limit, false)?;
         positive(prefix, "stale_age", self.stale_age, true)?;
-        positive(prefix, "fade_time", self.fade_time, true)
+        positive(prefix, "fade_time", self.fade_time, false)?;
+        positive(prefix, "max_tick_interval", self.max_tick_interval, false)
+    }
+
+    /// Rate of the stale release and of the re-entry from zero, N/s:
+    /// `max_force / fade_time`.
+    pub fn ramp_rate(&self) -> f64 {
+        self.max_force / self.fade_time
     }
 }
 

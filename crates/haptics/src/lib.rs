@@ -26,6 +26,7 @@ pub mod local_model;
 pub mod lsq;
 pub mod manager;
 pub mod proxy;
+pub mod ramp;
 pub mod renderer;
 pub mod runner;
 pub mod safety;
@@ -39,5 +40,6 @@ pub use config::{ConfigError, FitConfig, HapticsConfig, LoopConfig, ModelKind, R
 pub use local_model::{LocalModel, ModelParams, Params, Plane, Sphere};
 pub use manager::{FitReport, ModelManager, Sample, SampleError};
 pub use proxy::{Friction, Proxy, Surface};
-pub use renderer::{flags, HapticRenderer, TickOutput};
+pub use ramp::{ForceRamp, RampPhase};
+pub use renderer::{flags, HapticRenderer, RenderState, TickOutput};
 pub use runner::{LoopRunner, Percentiles, TickTiming, TimingRing, TimingSummary};

@@ -1,20 +1,9 @@
-//! Force safety stages applied to the rendered force, in order: stale-model
-//! fade, magnitude clamp, rate limit, and a final finiteness check. Stages are
-//! pure functions of their inputs so that each can be tested alone.
+//! Force safety stages applied to the rendered force, in order: magnitude
+//! clamp, rate limit, and a final finiteness check (the stale release and
+//! re-entry are [`crate::ForceRamp`]'s). Stages are pure functions of their
+//! inputs so that each can be tested alone.
 
 use crate::Vec3;
-
-/// Gain in [0, 1] for a model of age `age` (s): 1 up to `stale_age`, then a
-/// linear fade to 0 over `fade_time` (immediately 0 if `fade_time = 0`).
-pub fn fade_gain(age: f64, stale_age: f64, fade_time: f64) -> f64 {
-    if age <= stale_age {
-        1.0
-    } else if fade_time <= 0.0 {
-        0.0
-    } else {
-        (1.0 - (age - stale_age) / fade_time).clamp(0.0, 1.0)
-    }
-}
 
 /// `f` scaled down to magnitude `max` (N) if longer; returns whether it clamped.
 pub fn clamp_magnitude(f: Vec3, max: f64) -> (Vec3, bool) {
@@ -48,14 +37,6 @@ pub fn is_finite(v: &Vec3) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn fade_is_linear_between_ages() {
-        assert_eq!(fade_gain(0.05, 0.1, 0.1), 1.0);
-        assert!((fade_gain(0.15, 0.1, 0.1) - 0.5).abs() < 1e-12);
-        assert_eq!(fade_gain(0.25, 0.1, 0.1), 0.0);
-        assert_eq!(fade_gain(0.1001, 0.1, 0.0), 0.0);
-    }
 
     #[test]
     fn clamp_and_rate_limit_bound_the_output() {

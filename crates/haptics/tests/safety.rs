@@ -99,7 +99,7 @@ fn shading_alone_spreads_the_step_over_the_period() {
 }
 
 #[test]
-fn stale_model_fades_to_zero_in_the_configured_time() {
+fn stale_model_is_released_at_the_ramp_rate_and_re_enters_from_zero() {
     let cfg = RenderConfig {
         stale_age: 0.05,
         fade_time: 0.08,
@@ -126,10 +126,22 @@ fn stale_model_fades_to_zero_in_the_configured_time() {
         }
         prev = f;
     }
-    // A new model restores the force (ramped by the rate limit).
-    publish(&mut tx, plane(Vec3::y(), 0.0), 1000.0, 2);
-    for i in 201..=220 {
-        r.tick(p, i as f64 * DT);
+    assert!(r.faded_to_zero());
+    // A new model restores the force through the ramp from zero at
+    // max_force / fade_time = 20 N / 0.08 s = 250 N/s, 0.25 N per tick: the
+    // 10 N come back in 40 ticks, not in the 5 the 2000 N/s limit allows.
+    let mut prev = 0.0;
+    for i in 201..=260 {
+        if i % 10 == 1 {
+            // The physics is back at 100 Hz.
+            publish(&mut tx, plane(Vec3::y(), 0.0), 1000.0, i as u64);
+        }
+        let f = r.tick(p, i as f64 * DT).norm();
+        assert!(f - prev <= 0.25 + 1e-9, "tick {i}: {prev} → {f}");
+        if i <= 239 {
+            assert!(f < 10.0 - 1e-9, "tick {i}: back too fast ({f} N)");
+        }
+        prev = f;
     }
     assert!((r.output().force.norm() - 10.0).abs() < 1e-9);
 }
@@ -166,10 +178,18 @@ fn clamp_and_non_finite_inputs_never_leak() {
         period: 0.01,
         sequence: 2,
     });
+    // After the faults the force re-enters through the ramp from zero:
+    // max_force / fade_time = 5 N / 0.1 s = 50 N/s, 0.05 N per 1 ms tick.
     let f = r.tick(Vec3::new(0.0, -0.003, 0.0), 0.004);
     assert!(r.output().flags & flags::FAULT_MODEL != 0);
     assert_eq!(r.output().model_sequence, 1);
-    assert!((f - Vec3::new(0.0, 3.0, 0.0)).norm() < 1e-9);
+    assert!((f - Vec3::new(0.0, 0.05, 0.0)).norm() < 1e-9, "{f:?}");
+    let mut t = 0.004;
+    for _ in 0..70 {
+        t += DT;
+        r.tick(Vec3::new(0.0, -0.003, 0.0), t);
+    }
+    assert!((r.output().force - Vec3::new(0.0, 3.0, 0.0)).norm() < 1e-9);
 }
 
 #[test]

@@ -94,7 +94,7 @@ pub fn run_virtual(
         missed_deadlines: 0,
         physics_rate: steps.len() as f64 / t.max(1e-9),
         faults,
-        link_dropped: a.duplicate + a.stale + a.malformed + b.duplicate + b.stale + b.malformed,
+        link_dropped: a.rejected() + b.rejected(),
         dropped_records: 0,
     };
     Ok(RunOutput {
@@ -189,7 +189,7 @@ pub fn run_threads(
             missed_deadlines: report.timing.missed_deadlines,
             physics_rate: preport.rate,
             faults: report.faults,
-            link_dropped: report.link.duplicate + report.link.stale + report.link.malformed,
+            link_dropped: report.link.rejected(),
             dropped_records: report.dropped + steps.dropped(),
         },
         end: client_end(report.end),

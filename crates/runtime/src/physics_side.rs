@@ -62,14 +62,17 @@ impl PhysicsSide {
         let step = self.contact.step(&mut self.model, &pose, h);
         let s = step.sample;
         self.last = Some(s);
+        // No surface near the probe (D = +∞) goes on the wire as a finite
+        // sentinel with its own contact state.
+        let (distance, contact) = echothigh_transport::wire_query(s.distance, s.in_contact);
         let msg = SampleMsg {
             t_sample: t + h,
             p: s.p.into(),
-            distance: s.distance,
+            distance,
             gradient: s.gradient.into(),
             stiffness: s.stiffness,
             force: s.force.into(),
-            in_contact: u32::from(s.in_contact),
+            contact,
             newton_iterations: step.physics.newton_iterations,
             cg_iterations: step.physics.cg_iterations,
             limited: step.physics.limited,

@@ -7,7 +7,7 @@
 
 use echothigh_transport::{
     connect, in_process_pair, measure_round_trips, EchoResponder, FaultConfig, Link, ListenConfig,
-    RoundTripReport, UdpServer,
+    RoundTripReport, SessionToken, UdpServer,
 };
 use std::time::Duration;
 
@@ -36,8 +36,9 @@ fn main() {
     })
     .expect("bind loopback");
     let addr = server.local_addr().expect("local address");
-    let accept = std::thread::spawn(move || server.accept(1, none, 100.0, timeout, 0.0));
-    let (mut client, _) = connect(addr, 1, none, timeout, 0.0).expect("handshake");
+    let token = SessionToken::generate();
+    let accept = std::thread::spawn(move || server.accept(&token, none, 100.0, timeout, 0.0));
+    let (mut client, _) = connect(addr, &token, none, timeout, 0.0).expect("handshake");
     let responder = EchoResponder::spawn(accept.join().expect("accept thread").expect("accept"));
     let udp = measure_round_trips(&mut client, 200, count, timeout)
         .expect("udp round trips")

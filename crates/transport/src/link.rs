@@ -5,12 +5,15 @@
 //!
 //! All times are on the caller's clock (s), so a virtual clock works.
 //! Receiving is "latest wins": call [`Link::recv`] until it returns `None`
-//! and keep the last message of each kind; stale and duplicated datagrams
-//! never come out.
+//! and keep the last message of each kind; stale, duplicated, replayed and
+//! implausibly far-ahead datagrams never come out ([`SequenceFilter`]), nor
+//! do handshake messages once the session is up. Sending checks the
+//! message's values first ([`crate::limits`]) on either transport.
 
-use crate::codec::DecodeError;
+use crate::codec::{DecodeError, EncodeError};
 use crate::fault::{DelayLine, FaultConfig, DEFAULT_DELAY_CAPACITY};
-use crate::message::{bye_reason, ByeMsg, Message, WelcomeMsg};
+use crate::limits::check;
+use crate::message::{bye_reason, ByeMsg, Message};
 use crate::sequence::{LinkStats, SequenceFilter};
 use std::net::SocketAddr;
 use std::time::Duration;
@@ -71,42 +74,58 @@ pub enum LinkError {
         /// How long the caller waited.
         waited: Duration,
     },
-    /// A session token that does not parse.
-    #[error("invalid session token {text:?}: expected 1 to 16 hexadecimal digits")]
+    /// A session token that does not parse or is too short.
+    #[error("invalid session token {text:?}: {reason}")]
     BadToken {
-        /// The offending text.
+        /// The offending text (at most 80 characters of it).
         text: String,
+        /// What is wrong with it.
+        reason: String,
     },
+    /// A message that may not be sent (a non-finite or absurd value).
+    #[error(transparent)]
+    Encode(#[from] EncodeError),
     /// The endpoint was closed with [`Link::close`].
     #[error("the link is closed")]
     Closed,
 }
 
 /// Moves single messages, without faults, ordering or statistics of its own
-/// beyond malformed and wrong-token datagrams.
+/// beyond the datagrams it rejects.
 pub trait Transport {
     /// Puts one message on the wire now.
     fn transmit(&mut self, msg: &Message, stats: &mut LinkStats) -> Result<(), LinkError>;
-    /// Takes the next valid message off the wire, if any, without blocking.
-    /// Datagrams that fail [`crate::decode`] with `token` are counted in
-    /// `stats` (malformed or wrong token) and skipped.
-    fn receive(&mut self, token: u64, stats: &mut LinkStats) -> Result<Option<Message>, LinkError>;
+    /// Takes the next valid message of session `session` off the wire, if
+    /// any, without blocking. Datagrams that fail to decode (structure,
+    /// session, tag, values) are counted in `stats` by reason and skipped.
+    fn receive(
+        &mut self,
+        session: u64,
+        stats: &mut LinkStats,
+    ) -> Result<Option<Message>, LinkError>;
 }
 
-/// Counts a decode failure in `stats`.
+/// Counts a decode failure in `stats`, by reason.
 pub(crate) fn count_decode_error(e: DecodeError, stats: &mut LinkStats) {
     match e {
-        DecodeError::WrongToken => stats.wrong_token += 1,
-        _ => stats.malformed += 1,
+        DecodeError::WrongSession { .. } => stats.wrong_session += 1,
+        DecodeError::BadMac => stats.bad_mac += 1,
+        DecodeError::InvalidValue(_) => stats.bad_value += 1,
+        DecodeError::WrongSize { .. }
+        | DecodeError::BadMagic { .. }
+        | DecodeError::UnsupportedVersion { .. }
+        | DecodeError::UnknownKind { .. } => stats.malformed += 1,
     }
 }
 
 /// One end of the connection, object-safe so that the runtime can hold a
 /// `Box<dyn Link>` for either deployment.
 pub trait Link: Send {
-    /// Stamps `msg` (token, next sequence number, `t_send = now`) and sends
-    /// it through the fault injector; returns the sequence number given.
-    /// Messages already due are released (so a fault-free link sends now).
+    /// Stamps `msg` (session, next sequence number, `t_send = now`), checks
+    /// its values ([`LinkError::Encode`] names a non-finite or absurd field;
+    /// nothing is sent then) and sends it through the fault injector;
+    /// returns the sequence number given. Messages already due are released
+    /// (so a fault-free link sends now).
     fn send(&mut self, msg: Message, now: f64) -> Result<u64, LinkError>;
     /// Releases the delayed messages due at `now` (s) to the transport.
     fn poll(&mut self, now: f64) -> Result<(), LinkError>;
@@ -130,7 +149,7 @@ pub trait Link: Send {
 /// A [`Link`] over transport `T`.
 pub struct Endpoint<T: Transport> {
     transport: T,
-    token: u64,
+    session: u64,
     next_seq: u64,
     delay: DelayLine<Message>,
     filter: SequenceFilter,
@@ -138,16 +157,16 @@ pub struct Endpoint<T: Transport> {
     last_heard: Option<f64>,
     peer_closed: bool,
     closed: bool,
-    welcome: Option<WelcomeMsg>,
 }
 
 impl<T: Transport> Endpoint<T> {
-    /// An endpoint of session `token` over `transport`, injecting `faults`
-    /// on what it sends (validate them first). Allocates its delay line.
-    pub fn new(transport: T, token: u64, faults: FaultConfig) -> Self {
+    /// An endpoint of session `session` over `transport`, injecting
+    /// `faults` on what it sends (validate them first). Allocates its delay
+    /// line.
+    pub fn new(transport: T, session: u64, faults: FaultConfig) -> Self {
         Endpoint {
             transport,
-            token,
+            session,
             next_seq: 0,
             delay: DelayLine::new(faults, DEFAULT_DELAY_CAPACITY),
             filter: SequenceFilter::new(),
@@ -155,7 +174,6 @@ impl<T: Transport> Endpoint<T> {
             last_heard: None,
             peer_closed: false,
             closed: false,
-            welcome: None,
         }
     }
 
@@ -164,9 +182,19 @@ impl<T: Transport> Endpoint<T> {
         &self.transport
     }
 
-    /// The session token.
-    pub fn token(&self) -> u64 {
-        self.token
+    /// The session id.
+    pub fn session(&self) -> u64 {
+        self.session
+    }
+
+    /// Sets the session id (the client learns it from the Welcome).
+    pub(crate) fn set_session(&mut self, session: u64) {
+        self.session = session;
+    }
+
+    /// The underlying transport, mutable (the handshake sets its keys).
+    pub(crate) fn transport_mut(&mut self) -> &mut T {
+        &mut self.transport
     }
 
     /// Messages in the delay line.
@@ -174,16 +202,22 @@ impl<T: Transport> Endpoint<T> {
         self.delay.len()
     }
 
-    /// Adds counters gathered before the endpoint existed (handshake).
+    /// Adds the rejection counters gathered before the endpoint existed
+    /// (handshake).
     pub(crate) fn merge_stats(&mut self, s: &LinkStats) {
         self.stats.malformed += s.malformed;
+        self.stats.bad_value += s.bad_value;
+        self.stats.bad_mac += s.bad_mac;
+        self.stats.wrong_session += s.wrong_session;
         self.stats.wrong_token += s.wrong_token;
+        self.stats.rejections_sent += s.rejections_sent;
+        self.stats.rejections_suppressed += s.rejections_suppressed;
         self.stats.io_errors += s.io_errors;
     }
 
-    /// Server side: answer repeated Hellos with this Welcome.
-    pub(crate) fn set_welcome(&mut self, w: WelcomeMsg) {
-        self.welcome = Some(w);
+    /// Skips one sequence number (the server's Welcome used 0).
+    pub(crate) fn skip_sequence(&mut self) {
+        self.next_seq += 1;
     }
 
     /// Marks the peer heard at `now` (the handshake answer).
@@ -196,7 +230,7 @@ impl<T: Transport> Endpoint<T> {
         let seq = self.next_seq;
         self.next_seq += 1;
         let h = msg.header_mut();
-        h.token = self.token;
+        h.session = self.session;
         h.seq = seq;
         h.t_send = now;
         seq
@@ -204,6 +238,8 @@ impl<T: Transport> Endpoint<T> {
 
     /// Stamps and transmits `msg` now, without faults (handshake, Bye).
     pub(crate) fn send_direct(&mut self, mut msg: Message, now: f64) -> Result<u64, LinkError> {
+        msg.header_mut().t_send = now;
+        check(&msg).map_err(EncodeError::from)?;
         let seq = self.stamp(&mut msg, now);
         self.transport.transmit(&msg, &mut self.stats)?;
         self.stats.sent += 1;
@@ -217,6 +253,8 @@ impl<T: Transport + Send> Link for Endpoint<T> {
         if self.closed {
             return Err(LinkError::Closed);
         }
+        msg.header_mut().t_send = now;
+        check(&msg).map_err(EncodeError::from)?;
         let seq = self.stamp(&mut msg, now);
         self.stats.sent += 1;
         self.delay.push(msg, now, &mut self.stats);
@@ -236,7 +274,7 @@ impl<T: Transport + Send> Link for Endpoint<T> {
         if !self.closed {
             self.poll(now)?;
         }
-        while let Some(msg) = self.transport.receive(self.token, &mut self.stats)? {
+        while let Some(msg) = self.transport.receive(self.session, &mut self.stats)? {
             if !self.filter.accept(msg.seq(), &mut self.stats) {
                 continue;
             }
@@ -244,13 +282,9 @@ impl<T: Transport + Send> Link for Endpoint<T> {
             self.last_heard = Some(now);
             match msg {
                 Message::Bye(_) => self.peer_closed = true,
-                Message::Hello(h) => {
-                    if let Some(mut w) = self.welcome {
-                        w.nonce = h.nonce;
-                        self.send_direct(Message::Welcome(w), now)?;
-                        continue;
-                    }
-                }
+                // The session is up: a late handshake message (the
+                // client's confirmation sent twice) is heard, not delivered.
+                Message::Hello(_) | Message::Welcome(_) => continue,
                 _ => {}
             }
             return Ok(Some(msg));

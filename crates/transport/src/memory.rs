@@ -32,18 +32,19 @@ pub struct MemoryTransport {
 /// An in-process [`crate::Link`].
 pub type InProcessEndpoint = Endpoint<MemoryTransport>;
 
-/// Two connected in-process endpoints of session `token`: what `a` sends
+/// Two connected in-process endpoints of session `session` (any id; no
+/// tag: the memory of one process needs none): what `a` sends
 /// (with faults `a_faults`), `b` receives, and the other way round with
 /// `b_faults`. Validate the fault configurations first.
 pub fn in_process_pair(
-    token: u64,
+    session: u64,
     a_faults: FaultConfig,
     b_faults: FaultConfig,
 ) -> (InProcessEndpoint, InProcessEndpoint) {
     let (a, b) = MemoryTransport::pair();
     (
-        Endpoint::new(a, token, a_faults),
-        Endpoint::new(b, token, b_faults),
+        Endpoint::new(a, session, a_faults),
+        Endpoint::new(b, session, b_faults),
     )
 }
 
@@ -77,7 +78,11 @@ impl Transport for MemoryTransport {
         Ok(())
     }
 
-    fn receive(&mut self, token: u64, stats: &mut LinkStats) -> Result<Option<Message>, LinkError> {
+    fn receive(
+        &mut self,
+        session: u64,
+        stats: &mut LinkStats,
+    ) -> Result<Option<Message>, LinkError> {
         if !self.rx.updated() {
             return Ok(None);
         }
@@ -87,8 +92,9 @@ impl Transport for MemoryTransport {
         }
         stats.overwritten += slot.index - self.last_read - 1;
         self.last_read = slot.index;
-        if slot.msg.header().token != token {
-            count_decode_error(DecodeError::WrongToken, stats);
+        let found = slot.msg.header().session;
+        if found != session {
+            count_decode_error(DecodeError::WrongSession { found }, stats);
             return Ok(None);
         }
         Ok(Some(slot.msg))
@@ -122,7 +128,7 @@ mod tests {
             .unwrap();
         let got = a.recv(0.003).unwrap().unwrap();
         assert!(matches!(got, Message::Sample(_)));
-        assert_eq!(got.header().token, 9);
+        assert_eq!(got.header().session, 9);
         assert_eq!(got.header().t_send, 0.002);
     }
 
@@ -178,14 +184,14 @@ mod tests {
     }
 
     #[test]
-    fn wrong_token_is_counted_not_delivered() {
+    fn wrong_session_is_counted_not_delivered() {
         let (mut a, mut b) = MemoryTransport::pair();
         let mut stats = LinkStats::default();
         let mut msg = probe(0.0);
-        msg.header_mut().token = 1;
+        msg.header_mut().session = 1;
         a.transmit(&msg, &mut stats).unwrap();
         assert!(b.receive(2, &mut stats).unwrap().is_none());
-        assert_eq!(stats.wrong_token, 1);
+        assert_eq!(stats.wrong_session, 1);
         a.transmit(&msg, &mut stats).unwrap();
         assert!(b.receive(1, &mut stats).unwrap().is_some());
     }

@@ -6,7 +6,20 @@
 //! `D`, its gradient `∇D` and the local stiffness `k` ([`SampleMsg`], the
 //! inputs of the model manager, §4), plus the contact force and solver
 //! statistics. [`HelloMsg`] / [`WelcomeMsg`] form the handshake, [`ByeMsg`]
-//! a clean shutdown.
+//! a clean shutdown. On UDP every message is followed by a
+//! [`crate::MAC_LEN`]-byte tag ([`crate::auth`]); the session token itself
+//! is never sent.
+//!
+//! "No contact" on the wire: [`SampleMsg::contact`] says which of three
+//! states the physics is in ([`contact_state`]): touching (`D < 0` or 0),
+//! separated (`D > 0`, the distance to the surface), or no surface found
+//! near the probe, where the physics' own `D = +∞` is sent as the finite
+//! sentinel [`NO_SURFACE_DISTANCE`] (1 m, farther than any probe–skin
+//! distance that matters: a local model placed 1 m away renders no force
+//! within the device's workspace). Use [`wire_query`] to fill both. No
+//! field of any message may be non-finite or outside the limits of
+//! [`crate::limits`]: the encoder refuses such a message and the decoder
+//! drops such a datagram.
 //!
 //! Byte order: the structs are written as their in-memory bytes
 //! (`bytemuck`), and the crate refuses to compile on big-endian targets, so
@@ -19,12 +32,42 @@ use bytemuck::{Pod, Zeroable};
 /// The four magic bytes `b"ETHG"` at the start of every datagram.
 pub const MAGIC: u32 = u32::from_le_bytes(*b"ETHG");
 /// The wire-format version this crate speaks.
-pub const VERSION: u16 = 1;
-/// Size of the largest message (bytes); a buffer of this size holds any
-/// encoded message.
+pub const VERSION: u16 = 2;
+/// Size of the largest message (bytes), without its tag.
 pub const MAX_MESSAGE_SIZE: usize = std::mem::size_of::<SampleMsg>();
-/// A buffer able to hold any encoded message.
-pub type DatagramBuf = [u8; MAX_MESSAGE_SIZE];
+/// Size of the largest datagram: the largest message and its tag (bytes).
+pub const MAX_DATAGRAM_SIZE: usize = MAX_MESSAGE_SIZE + crate::auth::MAC_LEN;
+/// A buffer able to hold any datagram (message and tag).
+pub type DatagramBuf = [u8; MAX_DATAGRAM_SIZE];
+
+/// Distance sent when the physics found no surface near the probe (its
+/// `D = +∞`), m, with [`contact_state::NO_SURFACE`].
+pub const NO_SURFACE_DISTANCE: f64 = 1.0;
+
+/// Values of [`SampleMsg::contact`].
+pub mod contact_state {
+    /// The probe is outside the tissue; `distance` is `D > 0`.
+    pub const SEPARATED: u32 = 0;
+    /// The probe touches the tissue; `distance` is `D = −|F·n|/k ≤ 0`.
+    pub const TOUCHING: u32 = 1;
+    /// No surface near the probe; `distance` is
+    /// [`super::NO_SURFACE_DISTANCE`].
+    pub const NO_SURFACE: u32 = 2;
+}
+
+/// The wire form `(distance, contact)` of the physics' `D` (m) and contact
+/// flag: `D = +∞` (or beyond [`crate::limits::MAX_DISTANCE`]) outside
+/// contact becomes [`NO_SURFACE_DISTANCE`] with
+/// [`contact_state::NO_SURFACE`]. A NaN stays NaN (the encoder refuses it).
+pub fn wire_query(distance: f64, in_contact: bool) -> (f64, u32) {
+    if in_contact {
+        (distance, contact_state::TOUCHING)
+    } else if distance > crate::limits::MAX_DISTANCE {
+        (NO_SURFACE_DISTANCE, contact_state::NO_SURFACE)
+    } else {
+        (distance, contact_state::SEPARATED)
+    }
+}
 
 /// Header common to every message (32 bytes).
 #[repr(C)]
@@ -36,8 +79,9 @@ pub struct Header {
     pub version: u16,
     /// The message kind, one of [`Kind`] as `u16`.
     pub kind: u16,
-    /// Session token agreed in the handshake (see [`crate::SessionToken`]).
-    pub token: u64,
+    /// Public session id derived in the handshake (0 in a Hello); not a
+    /// secret: the tag authenticates, the id tells sessions apart.
+    pub session: u64,
     /// Sender's sequence number, strictly increasing per sender (all kinds).
     pub seq: u64,
     /// Time the message was sent, on the sender's clock (s).
@@ -126,8 +170,8 @@ pub struct SampleMsg {
     pub stiffness: f64,
     /// Net contact force on the probe, thigh frame (N).
     pub force: [f64; 3],
-    /// 1 when the probe touches the tissue, 0 otherwise.
-    pub in_contact: u32,
+    /// One of [`contact_state`]: touching, separated, or no surface.
+    pub contact: u32,
     /// Newton iterations of the last physics step.
     pub newton_iterations: u32,
     /// CG iterations of the last physics step (all Newton iterations).
@@ -138,24 +182,32 @@ pub struct SampleMsg {
     pub physics_rate: f64,
 }
 
-/// Handshake request, client → server.
+/// Handshake request, client → server, tagged with the token's hello key
+/// (session 0); after the Welcome, sent once more tagged with the session
+/// key to confirm the session.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct HelloMsg {
-    /// Common header; `token` is the session token the client presents.
+    /// Common header.
     pub header: Header,
-    /// Client nonce, echoed by the [`WelcomeMsg`].
+    /// Client nonce (random), echoed by the [`WelcomeMsg`].
     pub nonce: u64,
+    /// Reserved, zero: makes a Hello as long as a rejecting Bye (no
+    /// amplification).
+    pub _reserved: u64,
 }
 
-/// Handshake answer, server → client.
+/// Handshake answer, server → client, tagged with the new session's key.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct WelcomeMsg {
-    /// Common header; `token` echoes the session token.
+    /// Common header; `session` is the new session's id.
     pub header: Header,
     /// The client's nonce, echoed.
     pub nonce: u64,
+    /// Server nonce (random): with the client's and the token, the session
+    /// keys.
+    pub server_nonce: u64,
     /// Physics rate the server is configured for (Hz).
     pub physics_rate: f64,
 }
@@ -164,7 +216,9 @@ pub struct WelcomeMsg {
 pub mod bye_reason {
     /// Clean shutdown.
     pub const SHUTDOWN: u32 = 0;
-    /// The server rejected the client's session token.
+    /// The server rejected the client's session token (unauthenticated:
+    /// the server cannot tag it with a key the client would accept; the
+    /// client believes it only if it echoes its Hello's nonce).
     pub const REJECTED: u32 = 1;
 }
 
@@ -178,6 +232,8 @@ pub struct ByeMsg {
     pub reason: u32,
     /// Explicit padding, zero.
     pub _pad: u32,
+    /// A rejection echoes the refused Hello's nonce; 0 otherwise.
+    pub nonce: u64,
 }
 
 /// Any message of the wire format.
@@ -216,6 +272,7 @@ impl ByeMsg {
             header: Header::default(),
             reason,
             _pad: 0,
+            nonce: 0,
         }
     }
 }
@@ -243,7 +300,7 @@ impl Message {
         }
     }
 
-    /// The header, mutable (the link stamps token, sequence and send time).
+    /// The header, mutable (the link stamps session, sequence and send time).
     pub fn header_mut(&mut self) -> &mut Header {
         match self {
             Message::Probe(m) => &mut m.header,
@@ -269,6 +326,13 @@ impl Message {
             Message::Welcome(m) => bytemuck::bytes_of(m),
             Message::Bye(m) => bytemuck::bytes_of(m),
         }
+    }
+}
+
+impl SampleMsg {
+    /// True when [`Self::contact`] is [`contact_state::TOUCHING`].
+    pub fn in_contact(&self) -> bool {
+        self.contact == contact_state::TOUCHING
     }
 }
 
@@ -299,10 +363,12 @@ mod tests {
         assert_eq!(std::mem::size_of::<Header>(), 32);
         assert_eq!(Kind::Probe.size(), 104);
         assert_eq!(Kind::Sample.size(), 160);
-        assert_eq!(Kind::Hello.size(), 40);
-        assert_eq!(Kind::Welcome.size(), 48);
-        assert_eq!(Kind::Bye.size(), 40);
+        assert_eq!(Kind::Hello.size(), 48);
+        assert_eq!(Kind::Welcome.size(), 56);
+        assert_eq!(Kind::Bye.size(), 48);
+        assert_eq!(Kind::Hello.size(), Kind::Bye.size(), "no amplification");
         assert_eq!(MAX_MESSAGE_SIZE, 160);
+        assert_eq!(MAX_DATAGRAM_SIZE, 176);
     }
 
     #[test]
@@ -318,6 +384,17 @@ mod tests {
         }
         assert_eq!(Kind::from_code(0), None);
         assert_eq!(Kind::from_code(6), None);
+    }
+
+    #[test]
+    fn no_contact_is_a_finite_sentinel_with_its_own_state() {
+        assert_eq!(
+            wire_query(f64::INFINITY, false),
+            (NO_SURFACE_DISTANCE, contact_state::NO_SURFACE)
+        );
+        assert_eq!(wire_query(0.02, false), (0.02, contact_state::SEPARATED));
+        assert_eq!(wire_query(-0.003, true), (-0.003, contact_state::TOUCHING));
+        assert!(wire_query(f64::NAN, false).0.is_nan());
     }
 
     #[test]

@@ -1,189 +1,219 @@
-//! Decoder fuzzing: random bytes, truncated, oversized and mutated
-//! datagrams never panic, and every bad datagram that reaches an endpoint is
-//! counted (malformed or wrong token), never delivered.
+//! Codec properties (proptest), repeatable at any size: arbitrary bytes
+//! never panic either decoder; every in-bounds message round-trips through
+//! `seal` / `open`; any value out of bounds is refused by the encoder and,
+//! tagged anyway, by the decoder; any change to a sealed datagram is
+//! refused.
+//!
+//! The number of cases per property is `ECHOTHIGH_FUZZ_CASES` (default
+//! 256), e.g. a long run:
+//! `ECHOTHIGH_FUZZ_CASES=200000 cargo test -p echothigh-transport --release --test fuzz`.
 
-mod common;
-
-use common::session;
 use echothigh_transport::{
-    decode, encode, ByeMsg, DatagramBuf, DecodeError, FaultConfig, Header, HelloMsg, Kind, Link,
-    Message, ProbeMsg, SampleMsg, WelcomeMsg, MAX_MESSAGE_SIZE,
+    decode_any, limits, open, seal, ByeMsg, DatagramBuf, DatagramKey, DecodeError, EncodeError,
+    Header, HelloMsg, Message, ProbeMsg, SampleMsg, SessionKeys, SessionToken, WelcomeMsg, MAC_LEN,
+    MAX_DATAGRAM_SIZE,
 };
 use proptest::prelude::*;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use std::net::UdpSocket;
-use std::time::{Duration, Instant};
 
-const TOKEN: u64 = 0x5eed;
+const SESSION: u64 = 0x5eed;
 
-fn valid_messages() -> Vec<Message> {
-    let h = Header {
-        token: TOKEN,
-        seq: 3,
-        t_send: 0.5,
-        ..Header::default()
-    };
-    vec![
-        Message::Probe(ProbeMsg {
-            header: h,
-            ..ProbeMsg::new(0.4, [0.0, 0.1, 0.0], [1.0, 0.0, 0.0, 0.0], 0)
-        }),
-        Message::Sample(SampleMsg {
-            header: h,
-            stiffness: 500.0,
-            ..SampleMsg::default()
-        }),
-        Message::Hello(HelloMsg {
-            header: h,
-            nonce: 1,
-        }),
-        Message::Welcome(WelcomeMsg {
-            header: h,
-            nonce: 1,
-            physics_rate: 100.0,
-        }),
-        Message::Bye(ByeMsg {
-            header: h,
-            ..ByeMsg::new(0)
-        }),
-    ]
+fn cases() -> u32 {
+    std::env::var("ECHOTHIGH_FUZZ_CASES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(256)
 }
 
-fn encoded(i: usize) -> Vec<u8> {
-    let msgs = valid_messages();
-    let mut buf: DatagramBuf = [0; MAX_MESSAGE_SIZE];
-    let n = encode(&msgs[i % msgs.len()], &mut buf);
-    buf[..n].to_vec()
+fn key() -> DatagramKey {
+    let t: SessionToken = "00112233445566778899aabbccddeeff".parse().unwrap();
+    SessionKeys::derive(&t, 11, 22).client_to_server
+}
+
+fn header(seq: u64, t: f64) -> Header {
+    Header {
+        session: SESSION,
+        seq,
+        t_send: t,
+        ..Header::default()
+    }
+}
+
+/// Any `f64` bit pattern, NaN and infinities included, half the time; else
+/// a value in `[-bound, bound]`.
+fn value(bound: f64) -> impl Strategy<Value = f64> {
+    prop_oneof![any::<u64>().prop_map(f64::from_bits), -bound..=bound]
+}
+
+fn in_bounds(bound: f64) -> impl Strategy<Value = f64> {
+    -bound..=bound
+}
+
+/// Messages of every kind; `v` draws each `f64`.
+fn messages(wild: bool) -> impl Strategy<Value = Message> {
+    let f = move |b: f64| -> BoxedStrategy<f64> {
+        if wild {
+            value(b).boxed()
+        } else {
+            in_bounds(b).boxed()
+        }
+    };
+    let probe = (
+        any::<u64>(),
+        f(limits::MAX_TIME),
+        f(limits::MAX_TIME),
+        [
+            f(limits::MAX_POSITION),
+            f(limits::MAX_POSITION),
+            f(limits::MAX_POSITION),
+        ],
+        [f(1.0), f(1.0), f(1.0), f(1.0)],
+        any::<u32>(),
+    )
+        .prop_map(|(seq, t, td, position, orientation, flags)| {
+            Message::Probe(ProbeMsg {
+                header: header(seq, t),
+                ..ProbeMsg::new(td, position, orientation, flags)
+            })
+        });
+    let sample = (
+        (
+            any::<u64>(),
+            f(limits::MAX_TIME),
+            f(limits::MAX_TIME),
+            any::<u64>(),
+        ),
+        [
+            f(limits::MAX_POSITION),
+            f(limits::MAX_POSITION),
+            f(limits::MAX_POSITION),
+        ],
+        (f(limits::MAX_DISTANCE), f(1.0), f(limits::MAX_STIFFNESS)),
+        [
+            f(limits::MAX_FORCE),
+            f(limits::MAX_FORCE),
+            f(limits::MAX_FORCE),
+        ],
+        (0u32..=2, any::<u32>(), f(1e4).prop_map(f64::abs)),
+    )
+        .prop_map(
+            |((seq, t, ts, ps), p, (d, g, k), force, (contact, it, rate))| {
+                Message::Sample(SampleMsg {
+                    header: header(seq, t),
+                    t_sample: ts,
+                    probe_seq: ps,
+                    p,
+                    distance: d,
+                    gradient: [0.0, g, 0.0],
+                    stiffness: k,
+                    force,
+                    contact,
+                    newton_iterations: it,
+                    cg_iterations: it / 2,
+                    limited: it % 3,
+                    physics_rate: rate,
+                })
+            },
+        );
+    let small = (any::<u64>(), f(limits::MAX_TIME), any::<u64>(), 0u32..3).prop_map(
+        |(seq, t, nonce, which)| match which {
+            0 => Message::Hello(HelloMsg {
+                header: header(seq, t),
+                nonce,
+                _reserved: 0,
+            }),
+            1 => Message::Welcome(WelcomeMsg {
+                header: header(seq, t),
+                nonce,
+                server_nonce: nonce.rotate_left(7),
+                physics_rate: 100.0,
+            }),
+            _ => Message::Bye(ByeMsg {
+                header: header(seq, t),
+                nonce,
+                ..ByeMsg::new(1)
+            }),
+        },
+    );
+    prop_oneof![probe, sample, small]
+}
+
+/// The header fields `seal` sets from the variant.
+fn as_sent(msg: &Message) -> Message {
+    let mut m = *msg;
+    let h = m.header_mut();
+    h.magic = echothigh_transport::MAGIC;
+    h.version = echothigh_transport::VERSION;
+    h.kind = msg.kind() as u16;
+    m
 }
 
 proptest! {
+    #![proptest_config(ProptestConfig::with_cases(cases()))]
+
     #[test]
-    fn random_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
-        let _ = decode(&bytes, TOKEN);
+    fn arbitrary_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
+        let _ = decode_any(&bytes);
+        // Never accepted without the key's tag (2⁻¹²⁸ per case).
+        prop_assert!(open(&bytes, &key(), SESSION).is_err());
     }
 
     #[test]
-    fn truncated_or_oversized_is_wrong_size(i in 0usize..5, cut in 0usize..200, extra in 1usize..200) {
-        let good = encoded(i);
-        let short = &good[..cut.min(good.len() - 1)];
-        let short_ok = matches!(decode(short, TOKEN), Err(DecodeError::WrongSize { .. }));
-        prop_assert!(short_ok, "truncated datagram not rejected for its size");
-        let mut long = good.clone();
-        long.resize(good.len() + extra, 0);
-        let long_ok = matches!(decode(&long, TOKEN), Err(DecodeError::WrongSize { .. }));
-        prop_assert!(long_ok, "oversized datagram not rejected for its size");
+    fn in_bounds_messages_round_trip(msg in messages(false)) {
+        let mut buf: DatagramBuf = [0; MAX_DATAGRAM_SIZE];
+        let n = seal(&msg, &key(), &mut buf).unwrap();
+        prop_assert_eq!(n, msg.kind().size() + MAC_LEN);
+        prop_assert_eq!(open(&buf[..n], &key(), SESSION).unwrap(), as_sent(&msg));
     }
 
     #[test]
-    fn mutated_messages_decode_or_fail_typed(i in 0usize..5, at in 0usize..160, byte in any::<u8>()) {
-        let mut bytes = encoded(i);
-        let at = at % bytes.len();
-        bytes[at] = byte;
-        match decode(&bytes, TOKEN) {
-            Ok(m) => {
-                // Whatever decodes is a well-formed message of the right size.
-                prop_assert_eq!(m.kind().size(), bytes.len());
+    fn out_of_bounds_values_are_refused_on_both_sides(msg in messages(true)) {
+        let mut buf: DatagramBuf = [0; MAX_DATAGRAM_SIZE];
+        match (limits::check(&msg), seal(&msg, &key(), &mut buf)) {
+            (Ok(()), Ok(n)) => {
+                prop_assert_eq!(open(&buf[..n], &key(), SESSION).unwrap(), as_sent(&msg));
             }
-            Err(DecodeError::WrongSize { len, .. }) => prop_assert_eq!(len, bytes.len()),
-            Err(_) => {}
+            (Err(e), Err(EncodeError::InvalidValue(f))) => {
+                // Same field, same value bits (NaN ≠ NaN under `==`).
+                prop_assert_eq!((e.field, e.value.to_bits()), (f.field, f.value.to_bits()));
+                // A peer that tags the bytes anyway is refused after the tag.
+                let bytes = bytemuck_bytes(&as_sent(&msg));
+                let mut dg = bytes.clone();
+                dg.extend_from_slice(&key().tag(&bytes));
+                match open(&dg, &key(), SESSION) {
+                    Err(DecodeError::InvalidValue(g)) => prop_assert_eq!(g.field, e.field),
+                    other => prop_assert!(false, "tagged absurd value opened as {:?}", other),
+                }
+            }
+            (c, s) => prop_assert!(false, "check {:?} but seal {:?}", c, s),
         }
+    }
+
+    #[test]
+    fn any_change_to_a_sealed_datagram_is_refused(
+        msg in messages(false),
+        at in 0usize..MAX_DATAGRAM_SIZE,
+        flip in 1u8..=255,
+        cut in 0usize..MAX_DATAGRAM_SIZE,
+    ) {
+        let mut buf: DatagramBuf = [0; MAX_DATAGRAM_SIZE];
+        let n = seal(&msg, &key(), &mut buf).unwrap();
+        let mut bad = buf[..n].to_vec();
+        bad[at % n] ^= flip;
+        prop_assert!(open(&bad, &key(), SESSION).is_err());
+        let short = &buf[..cut % n];
+        let short_ok = matches!(open(short, &key(), SESSION), Err(DecodeError::WrongSize { .. }));
+        prop_assert!(short_ok, "a truncated datagram is refused for its size");
     }
 }
 
-/// A datagram that must be rejected: random, truncated, oversized, or with
-/// a corrupted header.
-fn bad_datagram(rng: &mut ChaCha8Rng) -> Vec<u8> {
-    let good = encoded(rng.gen_range(0..5));
-    match rng.gen_range(0..5) {
-        0 => {
-            let len = rng.gen_range(0..400);
-            // Random bytes; force a bad magic so it cannot decode by chance.
-            let mut v: Vec<u8> = (0..len).map(|_| rng.gen()).collect();
-            if v.len() >= 4 {
-                v[0] = b'X';
-            }
-            v
-        }
-        1 => good[..rng.gen_range(0..good.len())].to_vec(),
-        2 => {
-            let mut v = good.clone();
-            v.resize(good.len() + rng.gen_range(1..300), rng.gen());
-            v
-        }
-        3 => {
-            let mut v = good.clone();
-            v[rng.gen_range(0..8)] ^= 1 << rng.gen_range(0..8); // magic, version or kind
-            v
-        }
-        _ => {
-            let mut v = good.clone();
-            v[8] ^= 0x40; // token
-            v
-        }
+/// The bytes of a message as `seal` writes them, before the tag, without
+/// the value check.
+fn bytemuck_bytes(msg: &Message) -> Vec<u8> {
+    match msg {
+        Message::Probe(m) => bytemuck::bytes_of(m).to_vec(),
+        Message::Sample(m) => bytemuck::bytes_of(m).to_vec(),
+        Message::Hello(m) => bytemuck::bytes_of(m).to_vec(),
+        Message::Welcome(m) => bytemuck::bytes_of(m).to_vec(),
+        Message::Bye(m) => bytemuck::bytes_of(m).to_vec(),
     }
-}
-
-#[test]
-fn every_bad_datagram_reaching_an_endpoint_is_counted() {
-    let (mut server, client) = session(TOKEN, FaultConfig::default(), FaultConfig::default());
-    // The server only hears the client's address: send from it.
-    let client_addr = client.transport().local_addr().unwrap();
-    let server_addr = server.transport().local_addr().unwrap();
-    drop(client);
-    let raw = UdpSocket::bind(client_addr).unwrap();
-    raw.connect(server_addr).unwrap();
-    // Handshake datagrams still in flight (the client resends its Hello
-    // every 20 ms until it hears the Welcome; on a loaded machine one may
-    // arrive late) are legitimate: drain them and count from here.
-    let drain_until = Instant::now() + Duration::from_millis(100);
-    while Instant::now() < drain_until {
-        let _ = server.recv(1.0).unwrap();
-        std::thread::sleep(Duration::from_millis(5));
-    }
-    let base = server.stats();
-
-    let mut rng = ChaCha8Rng::seed_from_u64(2024);
-    let n = 2000u64;
-    let mut sent = 0u64;
-    while sent < n {
-        for _ in 0..50 {
-            raw.send(&bad_datagram(&mut rng)).unwrap();
-            sent += 1;
-        }
-        let target = sent;
-        let start = Instant::now();
-        loop {
-            assert!(
-                server.recv(1.0).unwrap().is_none(),
-                "a bad datagram was delivered"
-            );
-            let s = server.stats();
-            if s.malformed + s.wrong_token >= base.malformed + base.wrong_token + target
-                || start.elapsed() > Duration::from_secs(2)
-            {
-                break;
-            }
-            std::thread::sleep(Duration::from_micros(100));
-        }
-    }
-    let s = server.stats();
-    assert_eq!(
-        s.malformed + s.wrong_token - base.malformed - base.wrong_token,
-        n,
-        "{s:?}"
-    );
-    assert!(s.wrong_token > base.wrong_token && s.malformed > base.malformed);
-    assert_eq!(s.received, base.received, "a bad datagram was accepted");
-    // The link still works afterwards.
-    let mut good = valid_messages()[0];
-    good.header_mut().seq = 10_000;
-    let mut buf: DatagramBuf = [0; MAX_MESSAGE_SIZE];
-    let len = encode(&good, &mut buf);
-    raw.send(&buf[..len]).unwrap();
-    assert!(matches!(
-        common::recv_wait(&mut server, 2.0),
-        Some(Message::Probe(_))
-    ));
-    assert_eq!(good.kind(), Kind::Probe);
 }

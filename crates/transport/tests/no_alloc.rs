@@ -6,8 +6,8 @@ mod common;
 
 use echothigh_testkit::{count_allocations, CountingAllocator};
 use echothigh_transport::{
-    decode, encode, in_process_pair, DatagramBuf, DelayLine, FaultConfig, Link, LinkStats, Message,
-    ProbeMsg, SampleMsg, SequenceFilter, MAX_MESSAGE_SIZE,
+    in_process_pair, open, seal, DatagramBuf, DatagramKey, DelayLine, FaultConfig, Link, LinkStats,
+    Message, ProbeMsg, SampleMsg, SequenceFilter, MAX_DATAGRAM_SIZE,
 };
 
 #[global_allocator]
@@ -28,12 +28,13 @@ fn hot_paths_do_not_allocate() {
         stiffness: 700.0,
         ..SampleMsg::default()
     });
-    let mut buf: DatagramBuf = [0; MAX_MESSAGE_SIZE];
+    let mut buf: DatagramBuf = [0; MAX_DATAGRAM_SIZE];
+    let key = DatagramKey::hello(&common::token(1));
     let n = allocations_in(|| {
         for _ in 0..1000 {
-            let len = encode(&msg, &mut buf);
-            assert!(decode(&buf[..len], 0).is_ok());
-            assert!(decode(&buf[..len - 1], 0).is_err());
+            let len = seal(&msg, &key, &mut buf).unwrap();
+            assert!(open(&buf[..len], &key, 0).is_ok());
+            assert!(open(&buf[..len - 1], &key, 0).is_err());
         }
     });
     assert_eq!(n, 0, "codec allocated");
@@ -84,7 +85,7 @@ fn hot_paths_do_not_allocate() {
     assert!(haptic.stats().received > 1000);
 
     // UDP link over loopback (set up outside the window).
-    let (mut server, mut client) = common::session(3, faults, faults.with_seed(4));
+    let (mut server, mut client) = common::session(&common::token(3), faults, faults.with_seed(4));
     let n = allocations_in(|| {
         for i in 0..2000u32 {
             let now = f64::from(i) * 1e-3;

@@ -3,10 +3,11 @@
 
 mod common;
 
-use common::{loopback, recv_wait, session};
+use common::{loopback, recv_wait, session, token};
 use echothigh_transport::{
-    connect, encode, round_trip, DatagramBuf, EchoResponder, FaultConfig, Header, HelloMsg, Link,
-    LinkError, ListenConfig, Message, ProbeMsg, SampleMsg, UdpServer, MAX_MESSAGE_SIZE,
+    bye_reason, connect, decode_any, round_trip, seal, DatagramBuf, DatagramKey, EchoResponder,
+    FaultConfig, Header, HelloMsg, Link, LinkError, ListenConfig, Message, ProbeMsg, SampleMsg,
+    UdpServer, MAX_DATAGRAM_SIZE, MAX_REJECTIONS_PER_S,
 };
 use std::net::UdpSocket;
 use std::time::{Duration, Instant};
@@ -17,13 +18,18 @@ fn probe(t: f64) -> Message {
 
 #[test]
 fn handshake_then_both_directions() {
-    let (mut server, mut client) = session(0xfeed, FaultConfig::default(), FaultConfig::default());
+    let (mut server, mut client) = session(
+        &token(0xfeed),
+        FaultConfig::default(),
+        FaultConfig::default(),
+    );
     let seq = client.send(probe(0.25), 1.0).unwrap();
     let got = recv_wait(&mut server, 1.0).unwrap();
     match got {
         Message::Probe(p) => {
             assert_eq!(p.header.seq, seq);
-            assert_eq!(p.header.token, 0xfeed);
+            assert_eq!(p.header.session, server.session());
+            assert_eq!(server.session(), client.session());
             assert_eq!(p.header.t_send, 1.0);
             assert_eq!(p.position, [0.01, 0.08, 0.25]);
         }
@@ -32,7 +38,7 @@ fn handshake_then_both_directions() {
     let sample = SampleMsg {
         probe_seq: seq,
         stiffness: 640.0,
-        in_contact: 1,
+        contact: echothigh_transport::contact_state::TOUCHING,
         ..SampleMsg::default()
     };
     server.send(Message::Sample(sample), 1.01).unwrap();
@@ -53,20 +59,32 @@ fn wrong_token_is_rejected_and_the_right_client_still_gets_in() {
     let addr = server.local_addr().unwrap();
     let accept = std::thread::spawn(move || {
         server.accept(
-            7,
+            &token(7),
             FaultConfig::default(),
             100.0,
             Duration::from_secs(5),
             0.0,
         )
     });
-    let err = connect(addr, 8, FaultConfig::default(), Duration::from_secs(2), 0.0)
-        .err()
-        .expect("a wrong token must not connect");
+    let err = connect(
+        addr,
+        &token(8),
+        FaultConfig::default(),
+        Duration::from_secs(2),
+        0.0,
+    )
+    .err()
+    .expect("a wrong token must not connect");
     assert!(matches!(err, LinkError::Rejected { .. }), "{err}");
     assert!(err.to_string().contains("session token"));
-    let (_client, _) =
-        connect(addr, 7, FaultConfig::default(), Duration::from_secs(2), 0.0).unwrap();
+    let (_client, _) = connect(
+        addr,
+        &token(7),
+        FaultConfig::default(),
+        Duration::from_secs(2),
+        0.0,
+    )
+    .unwrap();
     let server = accept.join().unwrap().unwrap();
     assert!(server.stats().wrong_token >= 1);
 }
@@ -76,7 +94,7 @@ fn accept_times_out_with_a_clear_error() {
     let server = UdpServer::bind(&loopback()).unwrap();
     let err = server
         .accept(
-            1,
+            &token(1),
             FaultConfig::default(),
             100.0,
             Duration::from_millis(50),
@@ -94,7 +112,7 @@ fn connect_to_nobody_times_out_naming_the_address() {
     let addr = silent.local_addr().unwrap();
     let err = connect(
         addr,
-        1,
+        &token(1),
         FaultConfig::default(),
         Duration::from_millis(100),
         0.0,
@@ -120,7 +138,8 @@ fn non_loopback_bind_is_refused_without_allow_remote() {
 
 #[test]
 fn peer_silence_is_detected_after_the_server_goes_away() {
-    let (mut server, mut client) = session(3, FaultConfig::default(), FaultConfig::default());
+    let (mut server, mut client) =
+        session(&token(3), FaultConfig::default(), FaultConfig::default());
     server
         .send(Message::Sample(SampleMsg::default()), 1.0)
         .unwrap();
@@ -138,7 +157,8 @@ fn peer_silence_is_detected_after_the_server_goes_away() {
 
 #[test]
 fn clean_shutdown_is_reported_as_peer_closed() {
-    let (mut server, mut client) = session(3, FaultConfig::default(), FaultConfig::default());
+    let (mut server, mut client) =
+        session(&token(3), FaultConfig::default(), FaultConfig::default());
     server.close(2.0).unwrap();
     assert!(matches!(recv_wait(&mut client, 2.0), Some(Message::Bye(_))));
     assert!(client.peer_closed());
@@ -151,7 +171,7 @@ fn duplicated_datagrams_are_delivered_once() {
         duplicate: 1.0,
         ..FaultConfig::default()
     };
-    let (mut server, mut client) = session(4, FaultConfig::default(), faults);
+    let (mut server, mut client) = session(&token(4), FaultConfig::default(), faults);
     for i in 0..20 {
         let now = f64::from(i) * 1e-3;
         let seq = client.send(probe(now), now).unwrap();
@@ -166,47 +186,86 @@ fn duplicated_datagrams_are_delivered_once() {
     assert_eq!(server.stats().received, 20);
 }
 
+/// 300 wrong-token Hellos from one source within a second (issue 20: one
+/// reply and one log line each) get one rejecting reply; every one is
+/// counted; the right client still gets in.
 #[test]
-fn repeated_hello_after_the_handshake_gets_a_fresh_welcome() {
-    let (mut server, client) = session(11, FaultConfig::default(), FaultConfig::default());
-    // Pretend the Welcome was lost: a Hello comes again from the client's
-    // address (the server socket is connected to it, so only it gets in).
-    let client_addr = client.transport().local_addr().unwrap();
-    let hello = Message::Hello(HelloMsg {
-        header: Header {
-            token: 11,
-            seq: 1000,
-            ..Header::default()
-        },
-        nonce: 99,
+fn wrong_token_hellos_get_one_reply_per_second_and_are_counted() {
+    let server = UdpServer::bind(&loopback()).unwrap();
+    let addr = server.local_addr().unwrap();
+    let accept = std::thread::spawn(move || {
+        server.accept(
+            &token(7),
+            FaultConfig::default(),
+            100.0,
+            Duration::from_secs(10),
+            0.0,
+        )
     });
-    let mut buf: DatagramBuf = [0; MAX_MESSAGE_SIZE];
-    let n = encode(&hello, &mut buf);
-    assert_eq!(server.transport().peer(), client_addr);
-    drop(client);
-    let resend = UdpSocket::bind(client_addr).unwrap();
-    resend
-        .connect(server.transport().local_addr().unwrap())
-        .unwrap();
-    resend.send(&buf[..n]).unwrap();
-    assert!(
-        recv_wait(&mut server, 0.5).is_none(),
-        "a Hello is answered, not delivered"
-    );
-    resend
-        .set_read_timeout(Some(Duration::from_secs(1)))
-        .unwrap();
-    let mut back = [0u8; 256];
-    let m = resend.recv(&mut back).unwrap();
-    match echothigh_transport::decode(&back[..m], 11).unwrap() {
-        Message::Welcome(w) => assert_eq!(w.nonce, 99),
-        other => panic!("expected a Welcome, got {other:?}"),
+    let attacker = UdpSocket::bind("127.0.0.1:0").unwrap();
+    attacker.connect(addr).unwrap();
+    let wrong = DatagramKey::hello(&token(8));
+    let mut buf: DatagramBuf = [0; MAX_DATAGRAM_SIZE];
+    let n = 300u64;
+    let start = Instant::now();
+    for i in 0..n {
+        let hello = Message::Hello(HelloMsg {
+            header: Header {
+                seq: i,
+                ..Header::default()
+            },
+            nonce: 1000 + i,
+            _reserved: 0,
+        });
+        let len = seal(&hello, &wrong, &mut buf).unwrap();
+        attacker.send(&buf[..len]).unwrap();
+        // Paced (300 in ~0.1 s) so that the socket's receive buffer, not
+        // the server, is never what drops them.
+        std::thread::sleep(Duration::from_micros(300));
     }
+    // The replies: 1 within the first second from this one source.
+    attacker
+        .set_read_timeout(Some(Duration::from_millis(200)))
+        .unwrap();
+    let mut replies = 0;
+    let mut back = [0u8; 256];
+    while let Ok(m) = attacker.recv(&mut back) {
+        match decode_any(&back[..m]).unwrap() {
+            Message::Bye(b) => {
+                assert_eq!(b.reason, bye_reason::REJECTED);
+                assert!(
+                    (1000..1000 + n).contains(&b.nonce),
+                    "echoes a Hello's nonce"
+                );
+            }
+            other => panic!("expected a rejection, got {other:?}"),
+        }
+        replies += 1;
+    }
+    let within_a_second = start.elapsed() < Duration::from_secs(1);
+    let (_client, _) = connect(
+        addr,
+        &token(7),
+        FaultConfig::default(),
+        Duration::from_secs(2),
+        0.0,
+    )
+    .unwrap();
+    let server = accept.join().unwrap().unwrap();
+    let s = server.stats();
+    assert_eq!(s.wrong_token, n, "{s:?}");
+    assert_eq!(s.rejections_sent + s.rejections_suppressed, n);
+    if within_a_second {
+        // All sent and read within one second: one reply, at most.
+        assert_eq!(replies, 1);
+        assert_eq!(s.rejections_sent, 1);
+    }
+    assert!(s.rejections_sent <= u64::from(MAX_REJECTIONS_PER_S) * 2);
 }
 
 #[test]
 fn echo_round_trips_over_loopback() {
-    let (server, mut client) = session(5, FaultConfig::default(), FaultConfig::default());
+    let (server, mut client) = session(&token(5), FaultConfig::default(), FaultConfig::default());
     let responder = EchoResponder::spawn(server);
     let clock = Instant::now();
     let mut rtts = Vec::new();

@@ -8,7 +8,7 @@ use echothigh_runtime::deploy::{run_threads, summarize};
 use echothigh_runtime::recorder::RecordSink;
 use echothigh_transport::{
     connect, in_process_pair, measure_round_trips, EchoResponder, FaultConfig, ListenConfig,
-    RoundTripReport, UdpServer,
+    RoundTripReport, SessionToken, UdpServer,
 };
 use serde_json::json;
 use std::io::{BufRead, BufReader};
@@ -58,16 +58,23 @@ pub fn run(args: Args) -> Result<()> {
         allow_remote: false,
     })?;
     let addr = server.local_addr()?;
+    let token = SessionToken::generate();
     let accept = std::thread::spawn(move || {
         server.accept(
-            7,
+            &token,
             FaultConfig::default(),
             100.0,
             Duration::from_secs(5),
             0.0,
         )
     });
-    let (mut client, _) = connect(addr, 7, FaultConfig::default(), Duration::from_secs(5), 0.0)?;
+    let (mut client, _) = connect(
+        addr,
+        &token,
+        FaultConfig::default(),
+        Duration::from_secs(5),
+        0.0,
+    )?;
     let server_end = accept
         .join()
         .map_err(|_| anyhow::anyhow!("accept thread panicked"))??;

@@ -159,7 +159,7 @@ pub fn server(args: ServerArgs) -> Result<()> {
                 break 'sessions;
             }
             let slice = left.min(Duration::from_secs(1));
-            match listener.accept(token.0, scenario.link_faults().1, rate, slice, clock.now()) {
+            match listener.accept(&token, scenario.link_faults().1, rate, slice, clock.now()) {
                 Ok(l) => break l,
                 Err(LinkError::AcceptTimeout { .. }) => continue,
                 Err(e) => {
@@ -271,7 +271,7 @@ pub fn client(args: ClientArgs) -> Result<()> {
     let clock = Clock::start();
     let connected = connect(
         args.connect,
-        token.0,
+        &token,
         scenario.link_faults().0,
         connect_timeout,
         clock.now(),
@@ -314,7 +314,7 @@ pub fn client(args: ClientArgs) -> Result<()> {
             missed_deadlines: report.timing.missed_deadlines,
             physics_rate: report.physics_rate,
             faults: report.faults,
-            link_dropped: report.link.duplicate + report.link.stale + report.link.malformed,
+            link_dropped: report.link.rejected(),
             dropped_records: report.dropped,
         },
         end: client_end(report.end),

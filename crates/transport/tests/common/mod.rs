@@ -5,7 +5,7 @@
 #![allow(dead_code)]
 
 use echothigh_transport::{
-    connect, FaultConfig, Link, ListenConfig, Message, UdpEndpoint, UdpServer,
+    connect, FaultConfig, Link, ListenConfig, Message, SessionToken, UdpEndpoint, UdpServer,
 };
 use std::net::SocketAddr;
 use std::time::{Duration, Instant};
@@ -18,16 +18,22 @@ pub fn loopback() -> ListenConfig {
     }
 }
 
+/// A 16-digit token whose last digits are `n` (test tokens).
+pub fn token(n: u64) -> SessionToken {
+    format!("{n:016x}").parse().unwrap()
+}
+
 /// A connected (server, client) pair over loopback UDP.
 pub fn session(
-    token: u64,
+    token: &SessionToken,
     server_faults: FaultConfig,
     client_faults: FaultConfig,
 ) -> (UdpEndpoint, UdpEndpoint) {
     let server = UdpServer::bind(&loopback()).unwrap();
     let addr: SocketAddr = server.local_addr().unwrap();
+    let t = *token;
     let accept = std::thread::spawn(move || {
-        server.accept(token, server_faults, 100.0, Duration::from_secs(5), 0.0)
+        server.accept(&t, server_faults, 100.0, Duration::from_secs(5), 0.0)
     });
     let (client, welcome) =
         connect(addr, token, client_faults, Duration::from_secs(5), 0.0).unwrap();
