@@ -29,9 +29,11 @@ use crate::penalty::{PenaltyContact, Wrench};
 use crate::probe::Probe;
 use crate::stiffness::{ContactSet, ContactSpring, LocalStiffness};
 use crate::surface::SurfaceDistance;
-use echothigh_model::{SolveStats, StepStats, ThighModel, Vec3};
+use echothigh_model::timings::seconds_since;
+use echothigh_model::{SolveStats, StepStats, StepTimings, ThighModel, Vec3};
 use nalgebra::Isometry3;
 use serde::{Deserialize, Serialize};
+use std::time::Instant;
 
 /// What the physics sends the haptic side after each step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -64,6 +66,9 @@ pub struct QueryStats {
     pub stiffness_solve: SolveStats,
     /// True if the distance came from the surface query (out of contact).
     pub geometric_distance: bool,
+    /// Time of the queries' stages (s): `broad_phase` (their own),
+    /// `stiffness_solve`, `distance_query`.
+    pub timings: StepTimings,
 }
 
 /// The outcome of [`ProbeContact::step`].
@@ -160,8 +165,9 @@ impl ProbeContact {
     /// end (backward Euler evaluates the contact there); the probe's velocity
     /// is the pose change over `h`. Allocation-free.
     pub fn step(&mut self, model: &mut ThighModel, pose: &Isometry3<f64>, h: f64) -> ContactStep {
-        let (physics, _) = self.advance(model, pose, h);
+        let (mut physics, _) = self.advance(model, pose, h);
         let (sample, query) = self.sample(model);
+        physics.timings.accumulate(&query.timings);
         ContactStep {
             sample,
             physics,
@@ -185,9 +191,12 @@ impl ProbeContact {
         };
         self.last_pose = Some(*pose);
         self.contact.set_probe(*pose, velocity);
+        let clock = Instant::now();
         self.contact
             .prepare(model.positions(), model.velocities(), h);
-        let stats = model.step(h, &mut self.contact);
+        let broad_phase = seconds_since(clock);
+        let mut stats = model.step(h, &mut self.contact);
+        stats.timings.broad_phase += broad_phase;
         (
             stats,
             self.contact.wrench(model.positions(), model.velocities()),
@@ -233,10 +242,15 @@ impl ProbeContact {
         let k_dir = Probe::contact_direction(&pose);
         // Distance first: out of contact it bounds how far below the face
         // the first-touch surface can be.
+        let mut timings = StepTimings::default();
+        let clock = Instant::now();
         self.contact
             .prepare(model.positions(), model.velocities(), 0.0);
+        timings.broad_phase += seconds_since(clock);
         let (x, v) = (model.positions(), model.velocities());
+        let clock = Instant::now();
         let surface = self.surface.query(self.contact.grid(), x, &p);
+        timings.distance_query += seconds_since(clock);
         let wrench: Wrench = self.contact.wrench(x, v);
         let in_contact = wrench.samples > 0;
         let mut query = QueryStats {
@@ -260,7 +274,9 @@ impl ProbeContact {
             let reach = surface.map(|s| s.distance.abs()).unwrap_or(0.0);
             // Room for a tilted face: its far corner may be lower than p.
             let below = 2.0 * reach + self.contact.params().first_contact_band;
+            let clock = Instant::now();
             self.contact.prepare_with_reach(x, v, 0.0, below);
+            timings.broad_phase += seconds_since(clock);
             let band = self.contact.params().first_contact_band;
             let surfaces = self.contact.sample_surfaces();
             let top = surfaces
@@ -281,7 +297,9 @@ impl ProbeContact {
         let mut k = if self.set.springs.is_empty() {
             0.0
         } else {
+            let clock = Instant::now();
             let (k, stats) = self.stiffness.compute(model, &mut self.set);
+            timings.stiffness_solve += seconds_since(clock);
             query.stiffness_solve = stats;
             k
         };
@@ -301,6 +319,7 @@ impl ProbeContact {
             }
             (false, None) => (f64::INFINITY, -k_dir),
         };
+        query.timings = timings;
         let sample = HapticSample {
             p,
             distance,

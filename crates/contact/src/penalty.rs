@@ -42,7 +42,7 @@ use crate::grid::SurfaceGrid;
 use crate::params::ContactParams;
 use crate::probe::{OrientedBox, Probe};
 use crate::surface::Adjacency;
-use echothigh_model::{BlockSparse, ForceModel, ThighModel, Vec3};
+use echothigh_model::{BlockSparse, ForceModel, JacobianScratch, ThighModel, Vec3};
 use nalgebra::{Isometry3, Matrix3, Translation3, Vector3};
 
 /// The surface under one face sample, found by [`PenaltyContact::prepare`].
@@ -452,6 +452,30 @@ impl ForceModel for PenaltyContact {
                     let blocks = &self.tri_blocks[s.triangle];
                     Self::add_sample_block(kmat, blocks, &s.beta, &kk, lambda * a);
                     Self::add_sample_block(bmat, blocks, &s.beta, &kk, mu * a);
+                }
+            }
+        }
+    }
+
+    /// Direct assembly of `α ∂F/∂x + β ∂F/∂v` into `a`: one block per pair
+    /// of a penetrating sample's triangle nodes, `−(α λ_c + β μ_c) a_j β_m β_n k̂k̂ᵀ`
+    /// (no scratch matrices, no pass over the whole pattern).
+    fn add_scaled_jacobians(
+        &mut self,
+        x: &[Vec3],
+        v: &[Vec3],
+        alpha: f64,
+        beta: f64,
+        a: &mut BlockSparse,
+        _scratch: &mut JacobianScratch,
+    ) {
+        let k = self.direction();
+        let kk: Matrix3<f64> = k * k.transpose();
+        let c = (alpha * self.params.stiffness + beta * self.params.damping) * self.sample_area;
+        for s in self.surface.iter().flatten() {
+            if let Some(contact) = self.sample_contact(s, x, v) {
+                if !contact.clamped {
+                    Self::add_sample_block(a, &self.tri_blocks[s.triangle], &s.beta, &kk, c);
                 }
             }
         }

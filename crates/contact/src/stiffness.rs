@@ -23,7 +23,7 @@
 //! series. `n = −k̂` is the outward normal; with `F` the force on the
 //! tissue, `k = −∂(F·n)/∂depth`.
 
-use echothigh_model::{BlockSparse, ForceModel, NoExtraForce, SolveStats, ThighModel, Vec3};
+use echothigh_model::{BlockSparse, ForceModel, JacobianScratch, SolveStats, ThighModel, Vec3};
 use nalgebra::Matrix3;
 
 use crate::penalty::PenaltyContact;
@@ -90,6 +90,22 @@ impl ForceModel for ContactSet {
             PenaltyContact::add_sample_block(k, &s.blocks, &s.beta, &kk, s.c);
         }
     }
+
+    /// Direct assembly of `α ∂F/∂x` (the set has no damping) into `a`.
+    fn add_scaled_jacobians(
+        &mut self,
+        _x: &[Vec3],
+        _v: &[Vec3],
+        alpha: f64,
+        _beta: f64,
+        a: &mut BlockSparse,
+        _scratch: &mut JacobianScratch,
+    ) {
+        let kk: Matrix3<f64> = self.direction * self.direction.transpose();
+        for s in &self.springs {
+            PenaltyContact::add_sample_block(a, &s.blocks, &s.beta, &kk, alpha * s.c);
+        }
+    }
 }
 
 /// Scratch of the Schur-complement stiffness; allocation-free after `new`.
@@ -98,22 +114,16 @@ pub struct LocalStiffness {
     rhs: Vec<Vec3>,
     w: Vec<Vec3>,
     tw: Vec<Vec3>,
-    k_tissue: BlockSparse,
-    b_tissue: BlockSparse,
 }
 
 impl LocalStiffness {
     /// Scratch for `model`.
     pub fn new(model: &ThighModel) -> Self {
         let n = model.node_count();
-        let mut pattern = model.pattern().clone();
-        pattern.clear();
         Self {
             rhs: vec![Vec3::zeros(); n],
             w: vec![Vec3::zeros(); n],
             tw: vec![Vec3::zeros(); n],
-            k_tissue: pattern.clone(),
-            b_tissue: pattern,
         }
     }
 
@@ -136,8 +146,7 @@ impl LocalStiffness {
             self.w.fill(Vec3::zeros());
         }
         let stats = model.solve_stiffness(set, &self.rhs, &mut self.w);
-        model.jacobians(&mut NoExtraForce, &mut self.k_tissue, &mut self.b_tissue);
-        self.k_tissue.mul_vec(&self.w, &mut self.tw);
+        model.tissue_stiffness_product(&self.w, &mut self.tw);
         let fixed = model.fixed();
         let mut k = 0.0;
         // Free contact nodes: T = −K_tissue, so (T w)·k̂ = −(K w)·k̂.

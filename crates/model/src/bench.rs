@@ -16,6 +16,7 @@
 use crate::config::{ConfigError, ModelConfig};
 use crate::force_model::NoExtraForce;
 use crate::thigh::ThighModel;
+use crate::timings::StepTimings;
 use crate::Vec3;
 use serde::Serialize;
 use std::time::Instant;
@@ -90,6 +91,28 @@ pub struct CaseReport {
     pub limited_total: u32,
     /// Fraction of steps whose Newton met its tolerance.
     pub converged_fraction: f64,
+    /// Median over the measured steps of each stage's time (s, monotonic
+    /// wall clock; see [`StepTimings`]).
+    pub stage_median_s: StepTimings,
+}
+
+/// Per-stage medians (s) of a run's step timings.
+pub fn stage_medians(timings: &[StepTimings]) -> StepTimings {
+    let mut column = Vec::with_capacity(timings.len());
+    let mut median = |get: fn(&StepTimings) -> f64| {
+        column.clear();
+        column.extend(timings.iter().map(get));
+        column.sort_by(f64::total_cmp);
+        percentile(&column, 0.5)
+    };
+    StepTimings {
+        broad_phase: median(|t| t.broad_phase),
+        forces: median(|t| t.forces),
+        assembly: median(|t| t.assembly),
+        pcg: median(|t| t.pcg),
+        stiffness_solve: median(|t| t.stiffness_solve),
+        distance_query: median(|t| t.distance_query),
+    }
 }
 
 /// Builds the model of a case (default parameters, `n_θ × n_z`, gravity for `Free`).
@@ -163,6 +186,7 @@ pub fn run_case(
     };
     let mut times = Vec::with_capacity(steps);
     let mut cpu = Vec::with_capacity(steps);
+    let mut stages = Vec::with_capacity(steps);
     let (mut cg, mut cg_max, mut newton, mut limited, mut converged) = (0u64, 0u32, 0u64, 0u32, 0);
     for i in 0..warmup + steps {
         let t = model.time();
@@ -176,6 +200,7 @@ pub fn run_case(
         if i >= warmup {
             times.push(elapsed);
             cpu.push(cpu_elapsed);
+            stages.push(s.timings);
             cg += u64::from(s.cg_iterations);
             cg_max = cg_max.max(s.cg_iterations);
             newton += u64::from(s.newton_iterations);
@@ -208,11 +233,12 @@ pub fn run_case(
         newton_iterations_mean: newton as f64 / n,
         limited_total: limited,
         converged_fraction: converged as f64 / n,
+        stage_median_s: stage_medians(&stages),
     })
 }
 
 /// Nearest-rank percentile of sorted samples (0 if empty).
-fn percentile(sorted: &[f64], q: f64) -> f64 {
+pub fn percentile(sorted: &[f64], q: f64) -> f64 {
     if sorted.is_empty() {
         return 0.0;
     }

@@ -26,6 +26,7 @@ pub mod mesh;
 pub mod pcg;
 pub mod springs;
 pub mod thigh;
+pub mod timings;
 pub mod tissue;
 
 /// A 3-vector of `f64` (m, m/s or N by context).
@@ -38,4 +39,5 @@ pub use integrator::{Dynamics, ImplicitEuler, StepStats};
 pub use mesh::{Edge, EdgeKind, SurfaceMesh};
 pub use pcg::{Pcg, PcgParams, Preconditioner, SolveStats};
 pub use thigh::{Energy, ThighModel};
+pub use timings::StepTimings;
 pub use tissue::TissueForces;

@@ -188,6 +188,18 @@ impl ThighModel {
         extra.add_jacobians(&self.x, &self.v, k, b);
     }
 
+    /// `out = K w` (N), `K = ∂F/∂x` (N/m) of the tissue alone at the current
+    /// state, `w` in m, matrix-free (nothing assembled, nothing allocated):
+    /// what the local stiffness query needs after its solve.
+    ///
+    /// # Panics
+    /// If `w` or `out` is not of length [`Self::node_count`].
+    pub fn tissue_stiffness_product(&self, w: &[Vec3], out: &mut [Vec3]) {
+        assert!(w.len() == self.x.len() && out.len() == self.x.len());
+        out.fill(Vec3::zeros());
+        self.tissue.add_stiffness_product(&self.x, 1.0, w, out);
+    }
+
     /// Back to rest: rest positions, zero velocities, zero external forces, time 0.
     pub fn reset(&mut self) {
         self.x.copy_from_slice(self.mesh.rest_positions());

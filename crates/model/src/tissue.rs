@@ -172,6 +172,37 @@ impl TissueForces {
         linear + normal
     }
 
+    /// `out += α K w` (N for `α` = 1 and `w` in m), `K = ∂F/∂x` (N/m) of the
+    /// tissue at `x` (m), without assembling `K`: spring by spring, the same
+    /// blocks as [`ForceModel::add_scaled_jacobians`] with `β = 0` (so the
+    /// geometric term in compression follows the same switch). A linear
+    /// spring of block `S` adds `S (w_j − w_i)` to node `i` and the opposite
+    /// to `j`; a normal spring adds `−(S + k_t) w_k` to its node (SOFA's
+    /// `addDForce`).
+    pub fn add_stiffness_product(&self, x: &[Vec3], alpha: f64, w: &[Vec3], out: &mut [Vec3]) {
+        let geo = self.geometric_in_compression;
+        for s in &self.springs {
+            let delta = x[s.j] - x[s.i];
+            let l = delta.norm();
+            if l <= f64::MIN_POSITIVE {
+                continue;
+            }
+            let d = delta / l;
+            let f = linear_force(s.a, l - s.rest);
+            let g = if f < 0.0 && !geo { 0.0 } else { f / l };
+            // S u = (a − g) (d·u) d + g u, u = w_j − w_i.
+            let u = w[s.j] - w[s.i];
+            let su = (d * ((s.a - g) * d.dot(&u)) + u * g) * alpha;
+            out[s.i] += su;
+            out[s.j] -= su;
+        }
+        for s in &self.normals {
+            let law = |e| (normal_force(s.a, s.b, e), normal_stiffness(s.a, s.b, e));
+            let (_, stiff) = spring_force_jacobian(&x[s.node], &s.anchor, s.rest, law, geo);
+            out[s.node] -= (stiff + s.tangential_k) * (w[s.node] * alpha);
+        }
+    }
+
     /// Largest ratio, over nodes, of the normal spring's compression to its
     /// asymptote `b/a` (dimensionless; ≥ 1 means a node crossed it).
     pub fn max_asymptote_ratio(&self, x: &[Vec3]) -> f64 {

@@ -186,3 +186,98 @@ fn direct_scaled_assembly_matches_separate_jacobians() {
         );
     }
 }
+
+/// A pressed, perturbed state at rest (v = 0) and a direction `w` (m) zero
+/// on the held nodes.
+fn pressed_state(
+    config: &echothigh_model::ModelConfig,
+) -> (echothigh_model::ThighModel, Vec<Vec3>) {
+    let mut m = common::model(config);
+    common::press_top(&mut m, 8.0);
+    for _ in 0..20 {
+        m.step(0.01, &mut NoExtraForce);
+    }
+    let n = m.node_count();
+    let x: Vec<Vec3> = m
+        .positions()
+        .iter()
+        .zip(common::perturbation(n, 0.002, 31))
+        .map(|(x, d)| x + d)
+        .collect();
+    m.set_state(&x, &vec![Vec3::zeros(); n]);
+    let mut w = common::perturbation(n, 1.0, 32);
+    for (wi, &f) in w.iter_mut().zip(m.fixed()) {
+        if f {
+            *wi = Vec3::zeros();
+        }
+    }
+    (m, w)
+}
+
+/// The matrix-free `K w` equals the assembled `K` times `w` to rounding, with
+/// and without the compressed springs' geometric term.
+#[test]
+fn matrix_free_stiffness_product_matches_the_assembled_matrix() {
+    for geo in [false, true] {
+        let mut config = common::small_config(16, 7);
+        config.integrator.geometric_stiffness_in_compression = geo;
+        let (mut m, w) = pressed_state(&config);
+        let n = m.node_count();
+        let mut free_product = vec![Vec3::zeros(); n];
+        m.tissue_stiffness_product(&w, &mut free_product);
+        let (mut k, mut b) = (m.pattern().clone(), m.pattern().clone());
+        m.jacobians(&mut NoExtraForce, &mut k, &mut b);
+        let mut assembled = vec![Vec3::zeros(); n];
+        k.mul_vec(&w, &mut assembled);
+        // Each entry of either product is a sum of ≤ 52 rounded terms (13
+        // blocks of a row × 3 columns, and the ≤ 13 springs accumulated in a
+        // diagonal block), each ≤ |K|∞ |w|∞ in the row's sum: the two differ
+        // by at most 2 γ₅₂ ‖K‖∞ ‖w‖∞ (Higham, Accuracy and Stability, §3.1).
+        let dense = k.to_dense();
+        let norm_k = (0..dense.nrows())
+            .map(|r| dense.row(r).iter().map(|v| v.abs()).sum::<f64>())
+            .fold(0.0, f64::max);
+        let norm_w = w.iter().map(|v| v.amax()).fold(0.0, f64::max);
+        let gamma = 52.0 * f64::EPSILON / (1.0 - 52.0 * f64::EPSILON);
+        let tol = 2.0 * gamma * norm_k * norm_w;
+        let diff = free_product
+            .iter()
+            .zip(&assembled)
+            .map(|(a, b)| (a - b).amax())
+            .fold(0.0, f64::max);
+        assert!(diff <= tol, "geo {geo}: {diff} N > {tol} N");
+        assert!(norm_k * norm_w > 0.0);
+    }
+}
+
+/// The matrix-free `K w` is the directional derivative of the force: central
+/// differences `(F(x + εw) − F(x − εw)) / 2ε` (exact tangent: geometric
+/// terms kept; v = 0, so the dampers' ∂F/∂x, omitted from K, vanish).
+#[test]
+fn matrix_free_stiffness_product_matches_finite_differences() {
+    let mut config = common::small_config(16, 7);
+    config.integrator.geometric_stiffness_in_compression = true;
+    let (mut m, w) = pressed_state(&config);
+    let n = m.node_count();
+    let x = m.positions().to_vec();
+    let v = vec![Vec3::zeros(); n];
+    let mut product = vec![Vec3::zeros(); n];
+    m.tissue_stiffness_product(&w, &mut product);
+    let eps = 1e-7; // m along a direction of max-norm ≤ 1
+    let shifted = |s: f64| -> Vec<Vec3> { x.iter().zip(&w).map(|(x, w)| x + w * s).collect() };
+    let (mut f_plus, mut f_minus) = (vec![Vec3::zeros(); n], vec![Vec3::zeros(); n]);
+    m.set_state(&shifted(eps), &v);
+    m.forces(&mut NoExtraForce, &mut f_plus);
+    m.set_state(&shifted(-eps), &v);
+    m.forces(&mut NoExtraForce, &mut f_minus);
+    let scale = product.iter().map(|p| p.amax()).fold(0.0, f64::max);
+    let err = product
+        .iter()
+        .zip(f_plus.iter().zip(&f_minus))
+        .map(|(p, (a, b))| (p - (a - b) / (2.0 * eps)).amax())
+        .fold(0.0, f64::max);
+    // Truncation ε² |F'''| / 6 is ~1e-14 of |K w| here; rounding of the
+    // forces (|F| ≲ 10 N, ε_mach |F| / ε ≈ 2e-8 N) against |K w| ≳ 1e2 N
+    // leaves ~1e-10 relative: 1e-6 is the same bound as the assembled test.
+    assert!(err < 1e-6 * scale, "max error {err} N vs |K w| {scale} N");
+}

@@ -5,7 +5,8 @@
 
 use anyhow::{Context, Result};
 use echothigh_contact::{ContactParams, Probe, ProbeContact};
-use echothigh_model::{ModelConfig, ThighModel, Vec3};
+use echothigh_model::bench::{stage_medians, thread_cpu_us};
+use echothigh_model::{ModelConfig, StepTimings, ThighModel, Vec3};
 use serde_json::{json, Value};
 use std::time::Instant;
 
@@ -32,15 +33,23 @@ pub fn contact_report(steps: usize) -> Result<Value> {
         pc.step(&mut model, &pose(0.010 * i as f64 / 50.0), h);
     }
     let (mut step_ms, mut query_ms) = (Vec::with_capacity(steps), Vec::with_capacity(steps));
+    let (mut step_cpu_ms, mut query_cpu_ms) =
+        (Vec::with_capacity(steps), Vec::with_capacity(steps));
+    let mut stages: Vec<StepTimings> = Vec::with_capacity(steps);
     let (mut cg, mut newton, mut schur_cg, mut force) = (0u64, 0u64, 0u64, 0.0);
     for _ in 0..steps {
-        let t0 = Instant::now();
+        let (t0, c0) = (Instant::now(), thread_cpu_us());
         let (stats, _) = pc.advance(&mut model, &pose(0.010), h);
-        let t1 = Instant::now();
+        let (t1, c1) = (Instant::now(), thread_cpu_us());
         let (sample, q) = pc.sample(&mut model);
-        let t2 = Instant::now();
+        let (t2, c2) = (Instant::now(), thread_cpu_us());
         step_ms.push((t1 - t0).as_secs_f64() * 1e3);
         query_ms.push((t2 - t1).as_secs_f64() * 1e3);
+        step_cpu_ms.push((c1 - c0) * 1e-3);
+        query_cpu_ms.push((c2 - c1) * 1e-3);
+        let mut t = stats.timings;
+        t.accumulate(&q.timings);
+        stages.push(t);
         cg += stats.cg_iterations as u64;
         newton += stats.newton_iterations as u64;
         schur_cg += q.stiffness_solve.iterations as u64;
@@ -68,6 +77,9 @@ pub fn contact_report(steps: usize) -> Result<Value> {
         "force_n": force,
         "step_with_contact": summary(step_ms),
         "queries_in_contact": summary(query_ms),
+        "step_with_contact_thread_cpu": summary(step_cpu_ms),
+        "queries_in_contact_thread_cpu": summary(query_cpu_ms),
+        "stage_median_s": stage_medians(&stages),
         "step_plus_queries": summary(total),
         "steps_per_second": 1e3 / median_total,
         "mean_newton_iterations": newton as f64 / steps as f64,

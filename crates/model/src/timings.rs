@@ -1,0 +1,73 @@
+//! Per-stage timers of the physics step (rapier's counters, SOFA's scoped
+//! timers): plain data, filled by the integrator and the contact driver,
+//! returned with the step's statistics. Monotonic wall-clock time
+//! (`std::time::Instant`, a vDSO read on Linux: no system call, no
+//! allocation), in seconds: on a loaded machine it includes time the thread
+//! waited for a core, so benchmarks report the thread's CPU time of the
+//! whole step beside these.
+
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// Seconds spent in each stage of one physics step (0 for a stage not run).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct StepTimings {
+    /// Contact broad and narrow phase (grid rebuild, surface under the
+    /// probe's face samples), s.
+    pub broad_phase: f64,
+    /// Force evaluations of the Newton iterations (residuals), s.
+    pub forces: f64,
+    /// Newton matrix assembly `M − λhB − λ²h²K` (tissue + contact), s.
+    pub assembly: f64,
+    /// Preconditioned conjugate gradient of the Newton solves, s.
+    pub pcg: f64,
+    /// Local stiffness query: its assembly, solve and `K w`, s.
+    pub stiffness_solve: f64,
+    /// Distance query (closest surface point to the probe), s.
+    pub distance_query: f64,
+}
+
+impl StepTimings {
+    /// Field names, in the order of [`Self::values`] (e.g. CSV columns).
+    pub const NAMES: [&'static str; 6] = [
+        "broad_phase",
+        "forces",
+        "assembly",
+        "pcg",
+        "stiffness_solve",
+        "distance_query",
+    ];
+
+    /// The stage times in the order of [`Self::NAMES`], s.
+    pub fn values(&self) -> [f64; 6] {
+        [
+            self.broad_phase,
+            self.forces,
+            self.assembly,
+            self.pcg,
+            self.stiffness_solve,
+            self.distance_query,
+        ]
+    }
+
+    /// Sum of the stages, s.
+    pub fn total(&self) -> f64 {
+        self.values().iter().sum()
+    }
+
+    /// Adds `other`'s stages to these.
+    pub fn accumulate(&mut self, other: &StepTimings) {
+        self.broad_phase += other.broad_phase;
+        self.forces += other.forces;
+        self.assembly += other.assembly;
+        self.pcg += other.pcg;
+        self.stiffness_solve += other.stiffness_solve;
+        self.distance_query += other.distance_query;
+    }
+}
+
+/// Seconds since `start` (a stage timer's stop).
+#[inline]
+pub fn seconds_since(start: Instant) -> f64 {
+    start.elapsed().as_secs_f64()
+}
