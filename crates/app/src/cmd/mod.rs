@@ -2,5 +2,6 @@
 
 pub mod calibrate;
 pub mod image;
+pub mod integrity;
 pub mod net;
 pub mod run;

@@ -36,11 +36,12 @@ pub struct ServerArgs {
     /// Scenario TOML (default: the built-in one).
     #[arg(long)]
     pub scenario: Option<PathBuf>,
-    /// How long to wait for the client (s).
-    #[arg(long, default_value_t = 60.0)]
+    /// How long to wait for the client (s): a number >= 0, or `inf` to wait
+    /// forever.
+    #[arg(long, default_value_t = 60.0, value_parser = parse_wait)]
     pub accept_timeout: f64,
-    /// Silence of the client after which the server stops (s).
-    #[arg(long, default_value_t = 2.0)]
+    /// Silence of the client after which the server stops (s), in [0.01, 60].
+    #[arg(long, default_value_t = 2.0, value_parser = parse_peer_timeout)]
     pub peer_timeout: f64,
     /// Write the physics trace here (CSV).
     #[arg(long)]
@@ -73,8 +74,8 @@ pub struct ClientArgs {
     /// Output directory (default: runs/client-<unix time>).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Handshake timeout (s).
-    #[arg(long, default_value_t = 5.0)]
+    /// Handshake timeout (s): a number >= 0, or `inf` to wait forever.
+    #[arg(long, default_value_t = 5.0, value_parser = parse_wait)]
     pub connect_timeout: f64,
 }
 
@@ -105,7 +106,7 @@ pub fn server(args: ServerArgs) -> Result<()> {
             token.0,
             scenario.link_faults().1,
             rate,
-            Duration::from_secs_f64(args.accept_timeout),
+            wait_duration(args.accept_timeout),
             clock.now(),
         )
         .context("waiting for the haptic client")?;
@@ -154,7 +155,7 @@ pub fn client(args: ClientArgs) -> Result<()> {
         args.connect,
         token.0,
         scenario.link_faults().0,
-        Duration::from_secs_f64(args.connect_timeout),
+        wait_duration(args.connect_timeout),
         clock.now(),
     )
     .with_context(|| format!("connecting to the physics server at {}", args.connect))?;
@@ -208,4 +209,41 @@ pub fn client(args: ClientArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Parses a wait in seconds for `--accept-timeout` / `--connect-timeout`: a
+/// number >= 0, or `inf` (also `infinity`) for "wait forever". NaN and
+/// negative numbers are refused (they made `Duration::from_secs_f64` panic).
+pub fn parse_wait(text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number of seconds (or `inf`)"))?;
+    if v.is_nan() || v < 0.0 {
+        return Err(format!(
+            "must be >= 0 s or `inf` (wait forever), got {text}"
+        ));
+    }
+    Ok(v)
+}
+
+/// Parses `--peer-timeout`: seconds in [0.01, 60], the range of
+/// `coupling.peer_timeout` (a silence shorter than 10 ms is one missed
+/// datagram; longer than a minute the device would hold a stale force).
+pub fn parse_peer_timeout(text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number of seconds"))?;
+    if !(0.01..=60.0).contains(&v) {
+        return Err(format!("must be in [0.01, 60] s, got {text}"));
+    }
+    Ok(v)
+}
+
+/// The wait as a `Duration`: `inf` (or any wait past `Duration::MAX`, ~585
+/// billion years) is `Duration::MAX`, which the handshakes compare against
+/// the elapsed time and never add to an instant.
+pub fn wait_duration(seconds: f64) -> Duration {
+    Duration::try_from_secs_f64(seconds).unwrap_or(Duration::MAX)
 }

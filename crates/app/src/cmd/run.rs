@@ -140,6 +140,8 @@ pub fn run(args: Args) -> Result<()> {
     };
     bar.finish_and_clear();
     write_run(&dir, &scenario, &out)?;
+    super::integrity::check_finite(&out.ticks, &out.steps)
+        .with_context(|| format!("the run diverged (data written to {})", dir.display()))?;
     let s = &out.summary;
     println!("run written to {}", dir.display());
     println!(

@@ -145,6 +145,7 @@ impl VirtualRun {
         let probe = ProbeMsg::new(t, p.into(), EXAM_ORIENTATION, 0);
         let rendered = if self.mode == CouplingMode::Direct {
             let (sample, mut rec) = self.physics.step(&probe, self.physics_period, t);
+            self.physics.check()?;
             rec.t = t;
             self.steps.push(rec);
             self.source.direct(Vec3::from(sample.force), p, 0.0)
@@ -180,6 +181,7 @@ impl VirtualRun {
         if t + eps >= self.next_physics {
             if let Some(probe) = self.latest_probe {
                 let (mut sample, mut rec) = self.physics.step(&probe, self.physics_period, t);
+                self.physics.check()?;
                 sample.probe_seq = probe.header.seq;
                 rec.t = t;
                 self.steps.push(rec);
