@@ -45,7 +45,7 @@ impl ConfigError {
         } else {
             Err(ConfigError {
                 key: format!("{prefix}.{field}"),
-                value: value.to_string(),
+                value: format!("{value:?}"),
                 reason,
             })
         }

@@ -66,7 +66,7 @@ impl ConfigError {
         if value >= lo && value <= hi {
             Ok(())
         } else {
-            Err(Self::invalid(prefix, field, value, reason))
+            Err(Self::invalid(prefix, field, format!("{value:?}"), reason))
         }
     }
 
@@ -84,7 +84,7 @@ impl ConfigError {
             Some(i) => Err(Self::invalid(
                 prefix,
                 &format!("{field}[{i}]"),
-                value[i],
+                format!("{:?}", value[i]),
                 reason,
             )),
         }

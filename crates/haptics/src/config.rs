@@ -41,7 +41,7 @@ fn range(
         Err(invalid(
             prefix,
             field,
-            format!("must be in [{lo}, {hi}] {unit_why}, got {value}"),
+            format!("must be in [{lo}, {hi}] {unit_why}, got {value:?}"),
         ))
     }
 }

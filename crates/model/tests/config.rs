@@ -77,7 +77,7 @@ fn invalid_values_name_their_key() {
     assert_eq!(
         e.to_string(),
         "tissue.areal_density must be in [1, 200] kg/m² (soft tissue ~1000 kg/m³ over 1 mm \
-         to 0.2 m), got -1"
+         to 0.2 m), got -1.0"
     );
 }
 

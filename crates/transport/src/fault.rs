@@ -81,7 +81,7 @@ impl FaultConfig {
                     field,
                     format!(
                         "must be in [0, 0.5] s (teleoperation delays; with latency + jitter \
-                         <= 1 s the delay line holds 1 s of 1 kHz traffic), got {value}"
+                         <= 1 s the delay line holds 1 s of 1 kHz traffic), got {value:?}"
                     ),
                 ));
             }
@@ -90,7 +90,7 @@ impl FaultConfig {
             if !(0.0..=1.0).contains(&value) {
                 return Err(err(
                     field,
-                    format!("must be in [0, 1] (a probability), got {value}"),
+                    format!("must be in [0, 1] (a probability), got {value:?}"),
                 ));
             }
         }

@@ -52,7 +52,7 @@ impl CouplingConfig {
     pub fn validate(&self, prefix: &str) -> Result<()> {
         let range = |name: &str, v: f64, (lo, hi): (f64, f64), why: &str| -> Result<()> {
             if !(v >= lo && v <= hi) {
-                bail!("{prefix}.{name} must be in [{lo}, {hi}] {why}, got {v}");
+                bail!("{prefix}.{name} must be in [{lo}, {hi}] {why}, got {v:?}");
             }
             Ok(())
         };

@@ -84,7 +84,7 @@ pub(crate) fn range(
         Err(ConfigError::invalid(
             key(prefix, field),
             format!(
-                "must be in [{lo}, {hi}]{}{unit} ({why}), got {value}",
+                "must be in [{lo}, {hi}]{}{unit} ({why}), got {value:?}",
                 sp(unit)
             ),
         ))
@@ -131,7 +131,7 @@ pub(crate) fn in_range(
     } else {
         Err(ConfigError::invalid(
             key(prefix, field),
-            format!("must be in [{lo}, {hi}], got {value}"),
+            format!("must be in [{lo}, {hi}], got {value:?}"),
         ))
     }
 }
