@@ -104,7 +104,7 @@ const KEYS: &[Key] = &[
     f("haptics.render.texture_amplitude", 0.0, 2e-3),
     f("haptics.render.texture_wavelength", 1e-4, 0.1),
     f("haptics.render.max_force", 0.1, 200.0),
-    f("haptics.render.force_rate_limit", 10.0, 1e5),
+    f("haptics.render.force_rate_limit", 10.0, 1e12),
     f("haptics.render.stale_age", 0.0, 5.0),
     f("haptics.render.fade_time", 0.0, 5.0),
     Key {
