@@ -79,7 +79,7 @@ impl SurfaceGrid {
         let usable = |p: &Vector3<f64>| p.iter().all(|c| c.abs() <= Self::MAX_COORDINATE);
         let mut lo = Vector3::repeat(f64::INFINITY);
         let mut hi = Vector3::repeat(f64::NEG_INFINITY);
-        for p in x[..n].iter().filter(|p| usable(*p)) {
+        for p in x[..n].iter().filter(|p| usable(p)) {
             lo = lo.inf(p);
             hi = hi.sup(p);
         }
