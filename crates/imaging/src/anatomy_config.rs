@@ -450,7 +450,8 @@ impl AnatomyConfig {
             100000.0,
             "must be between 0 and 1e5 Pa (750 mmHg)",
         )?;
-        if !(self.artery_collapse_full <= 1e5)
+        if self.artery_collapse_full.is_nan()
+            || self.artery_collapse_full > 1e5
             || self.artery_collapse_full <= self.artery_collapse_onset
         {
             return Err(ImagingError::invalid(
