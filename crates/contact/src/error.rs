@@ -31,6 +31,26 @@ impl ConfigError {
         }
     }
 
+    /// Checks `lo <= value <= hi` (NaN fails); `reason` states the range
+    /// with its unit and why, e.g. `must be in [0.005, 0.05] m (...)`.
+    pub fn in_range(
+        prefix: &str,
+        field: &str,
+        value: f64,
+        (lo, hi): (f64, f64),
+        reason: &'static str,
+    ) -> Result<(), ConfigError> {
+        if value >= lo && value <= hi {
+            Ok(())
+        } else {
+            Err(ConfigError {
+                key: format!("{prefix}.{field}"),
+                value: format!("{value:?}"),
+                reason,
+            })
+        }
+    }
+
     /// Checks that `value` is finite and non-negative.
     pub fn non_negative(prefix: &str, field: &str, value: f64) -> Result<(), ConfigError> {
         if value.is_finite() && value >= 0.0 {

@@ -59,30 +59,42 @@ impl SurfaceGrid {
         self.cell
     }
 
+    /// Largest coordinate magnitude (m) of a point the grid bins: 1 km. The
+    /// thigh frame spans less than a metre, so a point beyond this (or with
+    /// a non-finite coordinate) belongs to a diverged model, which its owner
+    /// detects at its own checkpoint (`ThighModel::check_state`) and reports.
+    pub const MAX_COORDINATE: f64 = 1.0e3;
+
     /// Re-bins the points `x` (positions in m). `x.len()` must not exceed the
     /// size given to [`SurfaceGrid::new`]; extra points are ignored.
-    /// Non-finite coordinates are binned into the nearest cell (clamped).
-    pub fn rebuild(&mut self, x: &[Vector3<f64>]) {
+    ///
+    /// Points with a non-finite coordinate, or one beyond
+    /// ±[`SurfaceGrid::MAX_COORDINATE`], are skipped: they are in no cell,
+    /// so no query returns them. Returns how many were skipped (0 for a
+    /// healthy model). Skipping keeps the cell count bounded: a point at
+    /// 1e308 m made the bounding box's span overflow to infinity and the
+    /// cell counts to wrap (an index out of bounds, issue 20).
+    pub fn rebuild(&mut self, x: &[Vector3<f64>]) -> usize {
         let n = x.len().min(self.entries.len());
-        self.n_points = n;
+        let usable = |p: &Vector3<f64>| p.iter().all(|c| c.abs() <= Self::MAX_COORDINATE);
         let mut lo = Vector3::repeat(f64::INFINITY);
         let mut hi = Vector3::repeat(f64::NEG_INFINITY);
-        for p in &x[..n] {
-            if p.iter().all(|c| c.is_finite()) {
-                lo = lo.inf(p);
-                hi = hi.sup(p);
-            }
+        for p in x[..n].iter().filter(|p| usable(p)) {
+            lo = lo.inf(p);
+            hi = hi.sup(p);
         }
         if lo.x > hi.x {
             lo = Vector3::zeros();
             hi = Vector3::zeros();
         }
+        // span ≤ 2 km and cell ≥ target > 0: the counts below are finite
+        // and computed in f64, so they cannot wrap.
         let span = hi - lo;
         let mut cell = self.target_cell;
         loop {
-            let d = span.map(|s| (s / cell).floor() as usize + 1);
-            if d.x.saturating_mul(d.y).saturating_mul(d.z) <= self.max_cells {
-                self.dims = [d.x, d.y, d.z];
+            let d = span.map(|s| (s / cell).floor() + 1.0);
+            if d.x * d.y * d.z <= self.max_cells as f64 {
+                self.dims = [d.x as usize, d.y as usize, d.z as usize];
                 break;
             }
             cell *= 1.5;
@@ -92,25 +104,37 @@ impl SurfaceGrid {
         let n_cells = self.dims[0] * self.dims[1] * self.dims[2];
         let counts = &mut self.cell_start[..=n_cells];
         counts.fill(0);
+        const SKIPPED: u32 = u32::MAX;
+        let mut binned = 0;
         for (i, p) in x[..n].iter().enumerate() {
-            let c = self.cell_of(p);
-            self.point_cell[i] = c as u32;
-            self.cell_start[c + 1] += 1;
+            if usable(p) {
+                let c = self.cell_of(p);
+                self.point_cell[i] = c as u32;
+                self.cell_start[c + 1] += 1;
+                binned += 1;
+            } else {
+                self.point_cell[i] = SKIPPED;
+            }
         }
+        self.n_points = binned;
         for c in 0..n_cells {
             self.cell_start[c + 1] += self.cell_start[c];
         }
         // Place entries; `cell_start[c]` is used as a cursor and restored below.
         for i in 0..n {
-            let c = self.point_cell[i] as usize;
-            let slot = self.cell_start[c] as usize;
+            let c = self.point_cell[i];
+            if c == SKIPPED {
+                continue;
+            }
+            let slot = self.cell_start[c as usize] as usize;
             self.entries[slot] = i as u32;
-            self.cell_start[c] += 1;
+            self.cell_start[c as usize] += 1;
         }
         for c in (1..=n_cells).rev() {
             self.cell_start[c] = self.cell_start[c - 1];
         }
         self.cell_start[0] = 0;
+        n - binned
     }
 
     fn coord(&self, v: f64, axis: usize) -> usize {
@@ -188,7 +212,7 @@ impl SurfaceGrid {
     /// The point of `x` nearest to `c` and its distance (m), found by
     /// searching growing cubes of cells; `None` if the grid is empty.
     pub fn nearest(&self, x: &[Vector3<f64>], c: &Vector3<f64>) -> Option<(usize, f64)> {
-        if self.n_points == 0 {
+        if self.n_points == 0 || !c.iter().all(|v| v.is_finite()) {
             return None;
         }
         // Distance from c to the grid's box: the search starts there.
@@ -216,6 +240,9 @@ impl SurfaceGrid {
                 }
             }
             r *= 2.0;
+            if !r.is_finite() {
+                return best.map(|(i, d2)| (i, d2.sqrt()));
+            }
         }
     }
 }
@@ -275,6 +302,35 @@ mod tests {
             let dmin = x.iter().map(|p| (p - c).norm()).fold(f64::INFINITY, f64::min);
             prop_assert!((d - dmin).abs() < 1e-15 && ((x[i] - c).norm() - dmin).abs() < 1e-15);
         }
+    }
+
+    /// Regression (issue 20): a diverged model's far-away or non-finite
+    /// nodes made the span overflow and `rebuild` index out of bounds. They
+    /// are now skipped (counted) and the healthy points are still found
+    /// exactly as by brute force.
+    #[test]
+    fn far_away_and_non_finite_points_are_skipped_not_binned() {
+        let x = vec![
+            Vector3::new(0.01, 0.0, 0.0),
+            Vector3::new(1e308, -1e308, 0.0),
+            Vector3::new(f64::NAN, 0.0, 0.0),
+            Vector3::new(0.0, f64::INFINITY, 0.0),
+            Vector3::new(2e3, 0.0, 0.0),
+            Vector3::new(-0.02, 0.01, 0.0),
+        ];
+        let mut grid = SurfaceGrid::new(x.len(), 1e-3);
+        assert_eq!(grid.rebuild(&x), 4);
+        let mut out = Vec::new();
+        grid.query_sphere(&x, &Vector3::zeros(), 0.1, &mut out);
+        assert_eq!(out, vec![0, 5]);
+        let (i, d) = grid.nearest(&x, &Vector3::new(0.011, 0.0, 0.0)).unwrap();
+        assert_eq!(i, 0);
+        assert!((d - 0.001).abs() < 1e-15);
+        assert_eq!(grid.nearest(&x, &Vector3::new(f64::NAN, 0.0, 0.0)), None);
+        // All points unusable: the grid is empty and queries end.
+        let bad = vec![Vector3::repeat(f64::NAN); 3];
+        assert_eq!(grid.rebuild(&bad), 3);
+        assert_eq!(grid.nearest(&bad, &Vector3::zeros()), None);
     }
 
     #[test]

@@ -16,12 +16,15 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Probe {
-    /// Half of the face's lateral width along local x, m (default 0.020: a
-    /// 40 mm linear vascular probe).
+    /// Half of the face's lateral width along local x, m, in [0.005, 0.05]:
+    /// linear probes have apertures of ~10–100 mm. Default 0.020: a 40 mm
+    /// linear vascular probe.
     pub half_width: f64,
-    /// Half of the face's elevation thickness along local z, m (default 0.005).
+    /// Half of the face's elevation thickness along local z, m, in [0.001,
+    /// 0.02] (probe footprints are 2–40 mm thick). Default 0.005.
     pub half_elevation: f64,
-    /// Height of the body above the face along local +y, m (default 0.060).
+    /// Height of the body above the face along local +y, m, in [0.01, 0.3]
+    /// (a hand-held probe). Default 0.060.
     pub height: f64,
 }
 
@@ -68,9 +71,19 @@ impl OrientedBox {
 impl Probe {
     /// Checks every field; errors name the key as `"{prefix}.{field}"`.
     pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
-        ConfigError::positive(prefix, "half_width", self.half_width)?;
-        ConfigError::positive(prefix, "half_elevation", self.half_elevation)?;
-        ConfigError::positive(prefix, "height", self.height)?;
+        let p = prefix;
+        let width = "must be in [0.005, 0.05] m (linear probe apertures 10-100 mm)";
+        ConfigError::in_range(p, "half_width", self.half_width, (0.005, 0.05), width)?;
+        let elev = "must be in [0.001, 0.02] m (probe footprints 2-40 mm thick)";
+        ConfigError::in_range(
+            p,
+            "half_elevation",
+            self.half_elevation,
+            (0.001, 0.02),
+            elev,
+        )?;
+        let height = "must be in [0.01, 0.3] m (a hand-held probe)";
+        ConfigError::in_range(p, "height", self.height, (0.01, 0.3), height)?;
         Ok(())
     }
 

@@ -29,20 +29,34 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DeviceConfig {
-    /// Apparent end-effector mass at the stylus tip (kg). Default 0.075.
+    /// Apparent end-effector mass at the stylus tip (kg), in [0.01, 5]: from
+    /// the lightest desktop devices (~20 g) to large arm-scale devices (a few
+    /// kg). Default 0.075.
     pub mass: f64,
-    /// Viscous friction of the arm (N·s/m). Default 1.0.
+    /// Viscous friction of the arm (N·s/m), in [0, 50] (the order of 1 N·s/m
+    /// of PHANToM-class arms; 50 is already as viscous as the hand itself).
+    /// Default 1.0.
     pub viscous_friction: f64,
-    /// Peak force the device renders (N); larger commands are clamped. Default 6.0.
+    /// Peak force the device renders (N), in [0.5, 100]; larger commands are
+    /// clamped (desktop devices 3–9 N, the largest commercial ones ~40 N,
+    /// with margin). Default 6.0.
     pub max_force: f64,
-    /// Largest stable rendered stiffness at `sampling_rate` (N/m). Default 1000.
+    /// Largest stable rendered stiffness at `sampling_rate` (N/m), in [10,
+    /// 1e5] (Colgate & Schenkel's `2 b / T` with `b` ≤ 50 N·s/m and `T` ≥
+    /// 0.1 ms bounds it at 1e6; real devices 1–10 kN/m). Default 1000.
     pub max_stiffness: f64,
-    /// Servo rate at which forces are expected (Hz). Default 1000.
+    /// Servo rate at which forces are expected (Hz), in [100, 10 000]
+    /// (haptic servo loops run 0.5–10 kHz). Default 1000.
     pub sampling_rate: f64,
     /// Rate of the integration sub-steps inside [`advance`](crate::HapticDevice::advance)
-    /// (Hz); at least 10 000. Default 10 000.
+    /// (Hz), in [10 000, 100 000]: at least 10 kHz so that the hand's
+    /// fastest mode (`√(k/m)` ≤ 1 krad/s with `[hand]`'s bounds) is
+    /// resolved; at most 100 kHz so that a run's sub-steps stay bounded (an
+    /// hour at 100 kHz is already 3.6e8 sub-steps). Default 10 000.
     pub substep_rate: f64,
-    /// Device force / tissue force (dimensionless), see [`ForceScale`]. Default 0.3.
+    /// Device force / tissue force (dimensionless), in [0.01, 10], see
+    /// [`ForceScale`] (scales the clinical 5–40 N to a device's few N, or
+    /// up). Default 0.3.
     pub force_scale: f64,
 }
 
@@ -66,21 +80,27 @@ impl DeviceConfig {
 
     /// Checks every field, naming the offending key as `"{prefix}.{field}"`.
     pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
-        ConfigError::positive(prefix, "mass", self.mass)?;
-        ConfigError::non_negative(prefix, "viscous_friction", self.viscous_friction)?;
-        ConfigError::positive(prefix, "max_force", self.max_force)?;
-        ConfigError::positive(prefix, "max_stiffness", self.max_stiffness)?;
-        ConfigError::positive(prefix, "sampling_rate", self.sampling_rate)?;
-        ConfigError::positive(prefix, "substep_rate", self.substep_rate)?;
-        if self.substep_rate < Self::MIN_SUBSTEP_RATE {
-            return Err(ConfigError::invalid(
-                prefix,
-                "substep_rate",
-                self.substep_rate,
-                "must be >= 10000 Hz",
-            ));
-        }
-        ConfigError::positive(prefix, "force_scale", self.force_scale)
+        let p = prefix;
+        let mass = "must be in [0.01, 5] kg (desktop to arm-scale devices)";
+        ConfigError::in_range(p, "mass", self.mass, (0.01, 5.0), mass)?;
+        let visc = "must be in [0, 50] N·s/m (PHANToM-class arms ~1 N·s/m)";
+        ConfigError::in_range(
+            p,
+            "viscous_friction",
+            self.viscous_friction,
+            (0.0, 50.0),
+            visc,
+        )?;
+        let force = "must be in [0.5, 100] N (haptic devices' peak forces)";
+        ConfigError::in_range(p, "max_force", self.max_force, (0.5, 100.0), force)?;
+        let stiff = "must be in [10, 1e5] N/m (passivity bound 2b/T)";
+        ConfigError::in_range(p, "max_stiffness", self.max_stiffness, (10.0, 1e5), stiff)?;
+        let rate = "must be in [100, 10000] Hz (haptic servo rates)";
+        ConfigError::in_range(p, "sampling_rate", self.sampling_rate, (100.0, 1e4), rate)?;
+        let sub = "must be in [10000, 100000] Hz (resolves the hand; bounds the sub-steps)";
+        ConfigError::in_range(p, "substep_rate", self.substep_rate, (1e4, 1e5), sub)?;
+        let scale = "must be in [0.01, 10] (device force / tissue force)";
+        ConfigError::in_range(p, "force_scale", self.force_scale, (0.01, 10.0), scale)
     }
 
     /// The force scale as a typed value (call after [`validate`](Self::validate)).
@@ -100,11 +120,17 @@ impl DeviceConfig {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct HandConfig {
-    /// Hand (and forearm) mass moving rigidly with the stylus (kg). Default 0.5.
+    /// Hand (and forearm) mass moving rigidly with the stylus (kg), in [0,
+    /// 5] (0: a massless grip; a hand is ~0.4 kg, hand and forearm ~2 kg).
+    /// Default 0.5.
     pub mass: f64,
-    /// Stiffness of the spring pulling towards the setpoint (N/m). Default 300.
+    /// Stiffness of the spring pulling towards the setpoint (N/m), in [0,
+    /// 5000]: postural arm stiffness is 200–1000 N/m relaxed and a few kN/m
+    /// co-contracted (Mussa-Ivaldi et al. 1985; Tsuji et al. 1995). Default 300.
     pub stiffness: f64,
-    /// Damping relative to the setpoint's velocity (N·s/m). Default 5.
+    /// Damping relative to the setpoint's velocity (N·s/m), in [0, 100]
+    /// (measured hand damping is a few to ~10 N·s/m, Tsuji et al. 1995).
+    /// Default 5.
     pub damping: f64,
 }
 
@@ -121,8 +147,12 @@ impl Default for HandConfig {
 impl HandConfig {
     /// Checks every field, naming the offending key as `"{prefix}.{field}"`.
     pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
-        ConfigError::non_negative(prefix, "mass", self.mass)?;
-        ConfigError::non_negative(prefix, "stiffness", self.stiffness)?;
-        ConfigError::non_negative(prefix, "damping", self.damping)
+        let p = prefix;
+        let mass = "must be in [0, 5] kg (hand and forearm ~2 kg)";
+        ConfigError::in_range(p, "mass", self.mass, (0.0, 5.0), mass)?;
+        let stiff = "must be in [0, 5000] N/m (postural arm stiffness)";
+        ConfigError::in_range(p, "stiffness", self.stiffness, (0.0, 5000.0), stiff)?;
+        let damp = "must be in [0, 100] N·s/m (measured hand damping ~10 N·s/m)";
+        ConfigError::in_range(p, "damping", self.damping, (0.0, 100.0), damp)
     }
 }

@@ -54,6 +54,42 @@ impl ConfigError {
         }
     }
 
+    /// Checks `lo <= value <= hi` (NaN fails); `reason` states the range
+    /// with its unit and why, e.g. `must be in [0.01, 5] kg (...)`.
+    pub fn in_range(
+        prefix: &str,
+        field: &str,
+        value: f64,
+        (lo, hi): (f64, f64),
+        reason: &'static str,
+    ) -> Result<(), ConfigError> {
+        if value >= lo && value <= hi {
+            Ok(())
+        } else {
+            Err(Self::invalid(prefix, field, format!("{value:?}"), reason))
+        }
+    }
+
+    /// Checks that every component of a point lies in `[lo, hi]`; the error
+    /// names the first one outside, `"{prefix}.{field}[i]"`.
+    pub fn in_range3(
+        prefix: &str,
+        field: &str,
+        value: [f64; 3],
+        (lo, hi): (f64, f64),
+        reason: &'static str,
+    ) -> Result<(), ConfigError> {
+        match value.iter().position(|c| !(*c >= lo && *c <= hi)) {
+            None => Ok(()),
+            Some(i) => Err(Self::invalid(
+                prefix,
+                &format!("{field}[{i}]"),
+                format!("{:?}", value[i]),
+                reason,
+            )),
+        }
+    }
+
     /// Checks that `value` is finite and non-negative.
     pub fn non_negative(prefix: &str, field: &str, value: f64) -> Result<(), ConfigError> {
         if value.is_finite() && value >= 0.0 {

@@ -171,7 +171,10 @@ fn exam_validation_errors_name_the_key() {
         key_of(&with(&|c| c.press_direction = [0.0; 3])),
         "exam.press_direction"
     );
-    assert_eq!(key_of(&with(&|c| c.start[1] = f64::INFINITY)), "exam.start");
+    assert_eq!(
+        key_of(&with(&|c| c.start[1] = f64::INFINITY)),
+        "exam.start[1]"
+    );
     assert_eq!(
         key_of(&with(&|c| c.phases[0] = PhaseConfig::Approach {
             point: [0.0, 0.06, 0.15],

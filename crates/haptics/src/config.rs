@@ -26,24 +26,24 @@ fn invalid(prefix: &str, field: &str, reason: impl Into<String>) -> ConfigError 
     }
 }
 
-/// Checks that `value` is finite and `> 0` (or `>= 0` when `allow_zero`).
-fn positive(prefix: &str, field: &str, value: f64, allow_zero: bool) -> Result<(), ConfigError> {
-    if !value.is_finite() {
-        return Err(invalid(
+/// Checks `lo <= value <= hi` (NaN fails); `unit_why` gives the unit and the
+/// reason for the range, e.g. `m (smaller than the thigh's curvature)`.
+fn range(
+    prefix: &str,
+    field: &str,
+    value: f64,
+    (lo, hi): (f64, f64),
+    unit_why: &str,
+) -> Result<(), ConfigError> {
+    if value >= lo && value <= hi {
+        Ok(())
+    } else {
+        Err(invalid(
             prefix,
             field,
-            format!("must be finite, got {value}"),
-        ));
+            format!("must be in [{lo}, {hi}] {unit_why}, got {value:?}"),
+        ))
     }
-    if value < 0.0 || (!allow_zero && value == 0.0) {
-        let bound = if allow_zero { ">= 0" } else { "> 0" };
-        return Err(invalid(
-            prefix,
-            field,
-            format!("must be {bound}, got {value}"),
-        ));
-    }
-    Ok(())
 }
 
 /// Which local model `φ(u, x)` the model manager fits (paper §4).
@@ -63,29 +63,40 @@ pub enum ModelKind {
 pub struct FitConfig {
     /// Local model kind. Default `sphere`.
     pub model: ModelKind,
-    /// Radius given to the sphere before the window identifies it, m. Default 0.08.
+    /// Radius given to the sphere before the window identifies it, m, in
+    /// [0.001, 100] and within [min_radius, max_radius]. Default 0.08.
     pub initial_radius: f64,
     /// Smallest sphere radius and smallest distance from the newest sample to
-    /// the centre, m. Default 0.002.
+    /// the centre, m, in [1e-4, 0.05] (below the thigh's smallest curvature
+    /// radius, ~30 mm, and the probe's face). Default 0.002.
     pub min_radius: f64,
-    /// Largest sphere radius, m (a flat patch drives the radius up). Default 10.
+    /// Largest sphere radius, m (a flat patch drives the radius up), in
+    /// [0.01, 1000] (1 km is flat to 1e-9 m over a 2 mm patch). Default 10.
     pub max_radius: f64,
-    /// Number of recent samples in the fitting window (≥ 1). Default 8.
+    /// Number of recent samples in the fitting window, in [1, 256] (the fit
+    /// costs `O(window)` per Gauss–Newton iteration on the model manager;
+    /// with forgetting ≥ 0.01 the weight of sample 256 is nil anyway).
+    /// Default 8.
     pub window: usize,
-    /// Forgetting factor in (0, 1]: a sample `a` updates old weighs `forgetting^a`. Default 0.7.
+    /// Forgetting factor in [0.01, 1]: a sample `a` updates old weighs
+    /// `forgetting^a` (below 0.01 only the newest sample counts). Default 0.7.
     pub forgetting: f64,
     /// Weight of the gradient rows relative to the distance row, m
-    /// (1 m = the paper's unweighted `[Δφ; Δφ']`). Default 1.
+    /// (1 m = the paper's unweighted `[Δφ; Δφ']`), in [0, 10]. Default 1.
     pub gradient_weight: f64,
-    /// Gauss–Newton iterations per sample, at most. Default 10.
+    /// Gauss–Newton iterations per sample, at most, in [1, 100] (converging
+    /// fits take a few; bounds the work per sample). Default 10.
     pub max_iterations: usize,
-    /// Stop when the correction's norm falls below this, m. Default 1e-13.
+    /// Stop when the correction's norm falls below this, m, in [0, 1e-3].
+    /// Default 1e-13.
     pub tolerance: f64,
-    /// Singular values below `rcond · σ_max` count as zero in `J⁺`. Default 1e-9.
+    /// Singular values below `rcond · σ_max` count as zero in `J⁺`, in
+    /// [1e-15, 0.1] (from f64 round-off to a tenth of the largest). Default 1e-9.
     pub rcond: f64,
-    /// Largest correction per iteration `|du|`, m. Default 0.05.
+    /// Largest correction per iteration `|du|`, m, in [1e-4, 1]. Default 0.05.
     pub max_step: f64,
-    /// Physics period assumed before samples let us estimate it, s. Default 0.01.
+    /// Physics period assumed before samples let us estimate it, s, in
+    /// [1e-4, 0.1] (physics rates 10 Hz–10 kHz). Default 0.01.
     pub initial_period: f64,
 }
 
@@ -111,9 +122,12 @@ impl Default for FitConfig {
 impl FitConfig {
     /// Checks every field; the error names `"{prefix}.{field}"`.
     pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
-        positive(prefix, "initial_radius", self.initial_radius, false)?;
-        positive(prefix, "min_radius", self.min_radius, false)?;
-        positive(prefix, "max_radius", self.max_radius, false)?;
+        let p = prefix;
+        range(p, "initial_radius", self.initial_radius, (1e-3, 100.0), "m")?;
+        let min_r = "m (below the thigh's smallest curvature radius)";
+        range(p, "min_radius", self.min_radius, (1e-4, 0.05), min_r)?;
+        let max_r = "m (1 km is flat over a 2 mm patch)";
+        range(p, "max_radius", self.max_radius, (0.01, 1000.0), max_r)?;
         if self.max_radius <= self.min_radius {
             return Err(invalid(prefix, "max_radius", "must exceed min_radius"));
         }
@@ -124,27 +138,39 @@ impl FitConfig {
                 "must lie within [min_radius, max_radius]",
             ));
         }
-        if self.window == 0 || self.window > 1024 {
-            return Err(invalid(prefix, "window", "must be in 1..=1024"));
-        }
-        if !(self.forgetting > 0.0 && self.forgetting <= 1.0) {
+        if self.window == 0 || self.window > 256 {
             return Err(invalid(
                 prefix,
-                "forgetting",
-                format!("must be in (0, 1], got {}", self.forgetting),
+                "window",
+                "must be in 1..=256 (bounds the fit's work)",
             ));
         }
-        positive(prefix, "gradient_weight", self.gradient_weight, true)?;
-        if self.max_iterations == 0 {
-            return Err(invalid(prefix, "max_iterations", "must be ≥ 1"));
+        range(
+            p,
+            "forgetting",
+            self.forgetting,
+            (0.01, 1.0),
+            "(dimensionless)",
+        )?;
+        range(p, "gradient_weight", self.gradient_weight, (0.0, 10.0), "m")?;
+        if self.max_iterations == 0 || self.max_iterations > 100 {
+            return Err(invalid(
+                prefix,
+                "max_iterations",
+                "must be in 1..=100 (bounds the work per sample)",
+            ));
         }
-        positive(prefix, "tolerance", self.tolerance, true)?;
-        positive(prefix, "rcond", self.rcond, false)?;
-        if self.rcond >= 1.0 {
-            return Err(invalid(prefix, "rcond", "must be < 1"));
-        }
-        positive(prefix, "max_step", self.max_step, false)?;
-        positive(prefix, "initial_period", self.initial_period, false)
+        range(p, "tolerance", self.tolerance, (0.0, 1e-3), "m")?;
+        range(p, "rcond", self.rcond, (1e-15, 0.1), "(relative to σ_max)")?;
+        range(p, "max_step", self.max_step, (1e-4, 1.0), "m")?;
+        let period = "s (physics rates 10 Hz to 10 kHz)";
+        range(
+            p,
+            "initial_period",
+            self.initial_period,
+            (1e-4, 0.1),
+            period,
+        )
     }
 }
 
@@ -152,27 +178,35 @@ impl FitConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RenderConfig {
-    /// Static friction coefficient μ_s (tangential/normal force to break away). Default 0.3.
+    /// Static friction coefficient μ_s (tangential/normal force to break
+    /// away), in [0, 2]: gel-coated skin 0.1–0.5, dry skin up to ~1.5.
+    /// Default 0.3.
     pub static_friction: f64,
-    /// Kinetic friction coefficient μ_k ≤ μ_s while sliding. Default 0.2.
+    /// Kinetic friction coefficient μ_k ≤ μ_s while sliding, in [0, 2].
+    /// Default 0.2.
     pub kinetic_friction: f64,
-    /// Texture amplitude of the constraint height, m (0 = off). Default 0.
+    /// Texture amplitude of the constraint height, m (0 = off), in [0,
+    /// 0.002] (skin texture is sub-millimetre). Default 0.
     pub texture_amplitude: f64,
-    /// Texture wavelength, m. Default 0.002.
+    /// Texture wavelength, m, in [1e-4, 0.1]. Default 0.002.
     pub texture_wavelength: f64,
     /// Blend the displayed constraint into each new model over the estimated
     /// physics period (force shading; DESIGN §3 blends the parameters, we blend
     /// the constraint functions, which cannot bulge: see `shading`). Default true.
     pub shading: bool,
-    /// Largest force magnitude rendered, N (tissue side; the app scales to the device). Default 20.
+    /// Largest force magnitude rendered, N (tissue side; the app scales to
+    /// the device), in [0.1, 200] (compression exams use ~5–40 N). Default 20.
     pub max_force: f64,
-    /// Largest rate of change of the rendered force, N/s. Default 2000.
+    /// Largest rate of change of the rendered force, N/s, in [10, 1e12]: from
+    /// 0.01 N per 1 ms tick up to "no limit" (1e12 N/s, far past `max_force`
+    /// per tick, which tests use to isolate the other stages; a large value
+    /// allocates and loops nothing). Default 2000.
     pub force_rate_limit: f64,
     /// Model age beyond which the loss is declared and the force is
-    /// released to zero, s. Default 0.1.
+    /// released to zero, s, in [0, 5]. Default 0.1.
     pub stale_age: f64,
     /// Time in which the largest force (`max_force`) is released to zero
-    /// once the model is stale, s (positive). It sets the ramp rate
+    /// once the model is stale, s, in [1e-3, 5]. It sets the ramp rate
     /// `max_force / fade_time` (N/s) of the release and of the re-entry
     /// from zero after it ([`crate::ForceRamp`]). Default 0.1 (200 N/s,
     /// 0.2 N per 1 ms tick: below the 0.24 N per tick of normal pressing
@@ -205,8 +239,10 @@ impl Default for RenderConfig {
 impl RenderConfig {
     /// Checks every field; the error names `"{prefix}.{field}"`.
     pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
-        positive(prefix, "static_friction", self.static_friction, true)?;
-        positive(prefix, "kinetic_friction", self.kinetic_friction, true)?;
+        let p = prefix;
+        let mu = "(skin on gel 0.1-0.5, dry skin up to ~1.5)";
+        range(p, "static_friction", self.static_friction, (0.0, 2.0), mu)?;
+        range(p, "kinetic_friction", self.kinetic_friction, (0.0, 2.0), mu)?;
         if self.kinetic_friction > self.static_friction {
             return Err(invalid(
                 prefix,
@@ -214,13 +250,46 @@ impl RenderConfig {
                 "must not exceed static_friction",
             ));
         }
-        positive(prefix, "texture_amplitude", self.texture_amplitude, true)?;
-        positive(prefix, "texture_wavelength", self.texture_wavelength, false)?;
-        positive(prefix, "max_force", self.max_force, false)?;
-        positive(prefix, "force_rate_limit", self.force_rate_limit, false)?;
-        positive(prefix, "stale_age", self.stale_age, true)?;
-        positive(prefix, "fade_time", self.fade_time, false)?;
-        positive(prefix, "max_tick_interval", self.max_tick_interval, false)
+        let amp = "m (skin texture is sub-millimetre)";
+        range(
+            p,
+            "texture_amplitude",
+            self.texture_amplitude,
+            (0.0, 2e-3),
+            amp,
+        )?;
+        range(
+            p,
+            "texture_wavelength",
+            self.texture_wavelength,
+            (1e-4, 0.1),
+            "m",
+        )?;
+        let force = "N (compression exams use ~5-40 N)";
+        range(p, "max_force", self.max_force, (0.1, 200.0), force)?;
+        let rate = "N/s (0.01 N per 1 ms tick up to no limit)";
+        range(
+            p,
+            "force_rate_limit",
+            self.force_rate_limit,
+            (10.0, 1e12),
+            rate,
+        )?;
+        range(p, "stale_age", self.stale_age, (0.0, 5.0), "s")?;
+        range(
+            p,
+            "fade_time",
+            self.fade_time,
+            (1e-3, 5.0),
+            "s (sets the ramp rate)",
+        )?;
+        range(
+            p,
+            "max_tick_interval",
+            self.max_tick_interval,
+            (1e-5, 0.1),
+            "s (a haptic tick, 0.1 ms to 100 ms)",
+        )
     }
 
     /// Rate of the stale release and of the re-entry from zero, N/s:
@@ -234,9 +303,11 @@ impl RenderConfig {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LoopConfig {
-    /// Tick rate, Hz. Default 1000.
+    /// Tick rate, Hz, in [100, 10 000] (haptic loops run 0.5–10 kHz).
+    /// Default 1000.
     pub rate_hz: f64,
-    /// Number of per-tick timing records kept (ring buffer). Default 65536.
+    /// Number of per-tick timing records kept (ring buffer), in [1, 2²²]
+    /// (70 min at 1 kHz; bounds the allocation). Default 65536.
     pub ring_capacity: usize,
     /// Ask the OS for real-time priority (best effort; failure is logged once). Default true.
     pub realtime_priority: bool,
@@ -255,12 +326,14 @@ impl Default for LoopConfig {
 impl LoopConfig {
     /// Checks every field; the error names `"{prefix}.{field}"`.
     pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
-        positive(prefix, "rate_hz", self.rate_hz, false)?;
-        if self.rate_hz > 100_000.0 {
-            return Err(invalid(prefix, "rate_hz", "must be ≤ 100000"));
-        }
-        if self.ring_capacity == 0 || self.ring_capacity > 1 << 26 {
-            return Err(invalid(prefix, "ring_capacity", "must be in 1..=2^26"));
+        let rate = "Hz (haptic loops run 0.5-10 kHz)";
+        range(prefix, "rate_hz", self.rate_hz, (100.0, 1e4), rate)?;
+        if self.ring_capacity == 0 || self.ring_capacity > 1 << 22 {
+            return Err(invalid(
+                prefix,
+                "ring_capacity",
+                "must be in 1..=2^22 (70 min at 1 kHz; bounds the allocation)",
+            ));
         }
         Ok(())
     }

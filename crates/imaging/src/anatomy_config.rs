@@ -86,21 +86,29 @@ impl std::str::FromStr for VeinState {
 #[serde(deny_unknown_fields)]
 pub struct VeinStateParams {
     /// Lumen diameter relative to `vein_diameter` (dimensionless).
+    /// Accepted: in 0.2 to 2.
     pub diameter_factor: f64,
     /// Wall thickness (m).
+    /// Accepted: in 0.1 to 5 mm.
     pub wall_thickness: f64,
     /// Backscatter of the lumen content relative to muscle (dB).
+    /// Accepted: in -80 to 30 dB.
     pub content_echo: f64,
     /// Backscatter of the wall relative to muscle (dB).
+    /// Accepted: in -80 to 30 dB.
     pub wall_echo: f64,
     /// Attenuation slope of the lumen content (dB/(cm·MHz), one way): blood
     /// ≈ 0.15–0.2 (Duck 1990, ch. 4), thrombus higher.
+    /// Accepted: in 0 to 5 dB/(cm MHz) (blood 0.15, thrombus higher).
     pub content_attenuation: f64,
     /// Tissue pressure at the vein where the lumen starts to flatten (Pa).
+    /// Accepted: in 0 to 1e5 Pa (750 mmHg).
     pub collapse_onset: f64,
     /// Tissue pressure at which the lumen reaches its smallest size (Pa).
+    /// Accepted: in 1 to 1e5 Pa (750 mmHg).
     pub collapse_full: f64,
     /// Smallest lumen area relative to rest (dimensionless, in [0, 1]).
+    /// Accepted: in [0, 1].
     pub min_lumen_ratio: f64,
 }
 
@@ -154,7 +162,14 @@ impl VeinStateParams {
             2.0,
             "must be between 0.2 and 2",
         )?;
-        ImagingError::positive(prefix, "wall_thickness", self.wall_thickness)?;
+        ImagingError::in_range(
+            prefix,
+            "wall_thickness",
+            self.wall_thickness,
+            0.0001,
+            0.005,
+            "must be between 0.1 and 5 mm",
+        )?;
         ImagingError::in_range(
             prefix,
             "content_echo",
@@ -171,9 +186,30 @@ impl VeinStateParams {
             30.0,
             "must be between -80 and 30 dB",
         )?;
-        ImagingError::non_negative(prefix, "content_attenuation", self.content_attenuation)?;
-        ImagingError::non_negative(prefix, "collapse_onset", self.collapse_onset)?;
-        ImagingError::positive(prefix, "collapse_full", self.collapse_full)?;
+        ImagingError::in_range(
+            prefix,
+            "content_attenuation",
+            self.content_attenuation,
+            0.0,
+            5.0,
+            "must be between 0 and 5 dB/(cm MHz) (blood 0.15, thrombus higher)",
+        )?;
+        ImagingError::in_range(
+            prefix,
+            "collapse_onset",
+            self.collapse_onset,
+            0.0,
+            100000.0,
+            "must be between 0 and 1e5 Pa (750 mmHg)",
+        )?;
+        ImagingError::in_range(
+            prefix,
+            "collapse_full",
+            self.collapse_full,
+            1.0,
+            100000.0,
+            "must be between 1 and 1e5 Pa (750 mmHg)",
+        )?;
         if self.collapse_full <= self.collapse_onset {
             return Err(ImagingError::invalid(
                 prefix,
@@ -198,44 +234,61 @@ impl VeinStateParams {
 #[serde(deny_unknown_fields, default)]
 pub struct AnatomyConfig {
     /// Skin (epidermis + dermis) thickness (m). Default 1.8e-3.
+    /// Accepted: in 0.5 to 5 mm (thigh skin 1.5-2 mm).
     pub skin_thickness: f64,
     /// Subcutaneous fat thickness (m). Default 10e-3.
+    /// Accepted: in 1 to 100 mm (subcutaneous fat 5-15 mm, more in the obese).
     pub fat_thickness: f64,
     /// Muscle thickness from the deep fascia to the femur's top (m). Default 28e-3.
+    /// Accepted: in 5 to 150 mm (anterior thigh muscle 25-50 mm).
     pub muscle_thickness: f64,
     /// Thickness of the fascia lines (m). Default 0.5e-3.
+    /// Accepted: in 0.1 to 3 mm.
     pub fascia_thickness: f64,
     /// Depth of the intermuscular fascia below the skin at `u = 0` (m). Default 19e-3.
+    /// Accepted: in 1 to 250 mm.
     pub intermuscular_fascia_depth: f64,
     /// Vein diameter at rest in the healthy state (m). Default 10e-3.
+    /// Accepted: in 2 to 30 mm (femoral vein 8-11 mm).
     pub vein_diameter: f64,
     /// Lateral position of the vein's centre (m; negative is medial). Default −8e-3.
+    /// Accepted: in -50 to 50 mm of the probe centre.
     pub vein_lateral: f64,
     /// Depth of the vein's centre below the skin at rest (m). Default 30e-3.
     pub vein_depth: f64,
     /// Artery diameter at diastole (m). Default 7e-3.
+    /// Accepted: in 2 to 20 mm (femoral artery 6-8 mm).
     pub artery_diameter: f64,
     /// Lateral position of the artery's centre (m). Default 3e-3.
+    /// Accepted: in -50 to 50 mm of the probe centre.
     pub artery_lateral: f64,
     /// Depth of the artery's centre below the skin at rest (m). Default 29e-3.
     pub artery_depth: f64,
     /// Artery wall thickness (m). Default 0.7e-3.
+    /// Accepted: in 0.1 to 3 mm.
     pub artery_wall_thickness: f64,
     /// Peak systolic increase of the artery diameter, relative (dimensionless). Default 0.07.
+    /// Accepted: in [0, 0.5].
     pub artery_distension: f64,
     /// Heart rate (Hz). Default 1.0 (60 bpm).
+    /// Accepted: in 0 to 4 Hz (0 to 240 bpm).
     pub heart_rate: f64,
     /// Tissue pressure at which the artery starts to flatten (Pa). Default 80 mmHg.
+    /// Accepted: in 0 to 1e5 Pa (750 mmHg).
     pub artery_collapse_onset: f64,
     /// Tissue pressure at which the artery reaches its smallest size (Pa). Default 300 mmHg.
     pub artery_collapse_full: f64,
     /// Smallest artery lumen area relative to rest (dimensionless). Default 0.85.
+    /// Accepted: in [0, 1].
     pub artery_min_lumen_ratio: f64,
     /// Femur radius (m). Default 13e-3.
+    /// Accepted: in 5 to 30 mm (mid-shaft femur).
     pub femur_radius: f64,
     /// Lateral position of the femur's centre (m). Default 6e-3.
+    /// Accepted: in -50 to 50 mm of the probe centre.
     pub femur_lateral: f64,
     /// Femoral cortex thickness (m). Default 5e-3.
+    /// Accepted: in 0.5 to 15 mm (femoral cortex 4-7 mm).
     pub cortex_thickness: f64,
     /// Vein in the healthy state (`[imaging.anatomy.healthy]`).
     pub healthy: VeinStateParams,
@@ -293,20 +346,86 @@ impl AnatomyConfig {
     /// Checks every field, naming the offending key as `"{prefix}.{field}"`.
     pub fn validate(&self, prefix: &str) -> Result<(), ImagingError> {
         let p = prefix;
-        ImagingError::positive(p, "skin_thickness", self.skin_thickness)?;
-        ImagingError::positive(p, "fat_thickness", self.fat_thickness)?;
-        ImagingError::positive(p, "muscle_thickness", self.muscle_thickness)?;
-        ImagingError::positive(p, "fascia_thickness", self.fascia_thickness)?;
-        ImagingError::positive(
+        ImagingError::in_range(
+            p,
+            "skin_thickness",
+            self.skin_thickness,
+            0.0005,
+            0.005,
+            "must be between 0.5 and 5 mm (thigh skin 1.5-2 mm)",
+        )?;
+        ImagingError::in_range(
+            p,
+            "fat_thickness",
+            self.fat_thickness,
+            0.001,
+            0.1,
+            "must be between 1 and 100 mm (subcutaneous fat 5-15 mm, more in the obese)",
+        )?;
+        ImagingError::in_range(
+            p,
+            "muscle_thickness",
+            self.muscle_thickness,
+            0.005,
+            0.15,
+            "must be between 5 and 150 mm (anterior thigh muscle 25-50 mm)",
+        )?;
+        ImagingError::in_range(
+            p,
+            "fascia_thickness",
+            self.fascia_thickness,
+            0.0001,
+            0.003,
+            "must be between 0.1 and 3 mm",
+        )?;
+        ImagingError::in_range(
             p,
             "intermuscular_fascia_depth",
             self.intermuscular_fascia_depth,
+            0.001,
+            0.25,
+            "must be between 1 and 250 mm",
         )?;
-        ImagingError::positive(p, "vein_diameter", self.vein_diameter)?;
-        ImagingError::finite(p, "vein_lateral", self.vein_lateral)?;
-        ImagingError::positive(p, "artery_diameter", self.artery_diameter)?;
-        ImagingError::finite(p, "artery_lateral", self.artery_lateral)?;
-        ImagingError::positive(p, "artery_wall_thickness", self.artery_wall_thickness)?;
+        ImagingError::in_range(
+            p,
+            "vein_diameter",
+            self.vein_diameter,
+            0.002,
+            0.03,
+            "must be between 2 and 30 mm (femoral vein 8-11 mm)",
+        )?;
+        ImagingError::in_range(
+            p,
+            "vein_lateral",
+            self.vein_lateral,
+            -0.05,
+            0.05,
+            "must be between -50 and 50 mm of the probe centre",
+        )?;
+        ImagingError::in_range(
+            p,
+            "artery_diameter",
+            self.artery_diameter,
+            0.002,
+            0.02,
+            "must be between 2 and 20 mm (femoral artery 6-8 mm)",
+        )?;
+        ImagingError::in_range(
+            p,
+            "artery_lateral",
+            self.artery_lateral,
+            -0.05,
+            0.05,
+            "must be between -50 and 50 mm of the probe centre",
+        )?;
+        ImagingError::in_range(
+            p,
+            "artery_wall_thickness",
+            self.artery_wall_thickness,
+            0.0001,
+            0.003,
+            "must be between 0.1 and 3 mm",
+        )?;
         ImagingError::in_range(
             p,
             "artery_distension",
@@ -315,16 +434,31 @@ impl AnatomyConfig {
             0.5,
             "must be in [0, 0.5]",
         )?;
-        ImagingError::non_negative(p, "heart_rate", self.heart_rate)?;
-        ImagingError::non_negative(p, "artery_collapse_onset", self.artery_collapse_onset)?;
+        ImagingError::in_range(
+            p,
+            "heart_rate",
+            self.heart_rate,
+            0.0,
+            4.0,
+            "must be between 0 and 4 Hz (0 to 240 bpm)",
+        )?;
+        ImagingError::in_range(
+            p,
+            "artery_collapse_onset",
+            self.artery_collapse_onset,
+            0.0,
+            100000.0,
+            "must be between 0 and 1e5 Pa (750 mmHg)",
+        )?;
         if self.artery_collapse_full.is_nan()
+            || self.artery_collapse_full > 1e5
             || self.artery_collapse_full <= self.artery_collapse_onset
         {
             return Err(ImagingError::invalid(
                 p,
                 "artery_collapse_full",
                 self.artery_collapse_full,
-                "must exceed artery_collapse_onset",
+                "must exceed artery_collapse_onset and be at most 1e5 Pa (750 mmHg)",
             ));
         }
         ImagingError::in_range(
@@ -335,9 +469,30 @@ impl AnatomyConfig {
             1.0,
             "must be in [0, 1]",
         )?;
-        ImagingError::positive(p, "femur_radius", self.femur_radius)?;
-        ImagingError::finite(p, "femur_lateral", self.femur_lateral)?;
-        ImagingError::positive(p, "cortex_thickness", self.cortex_thickness)?;
+        ImagingError::in_range(
+            p,
+            "femur_radius",
+            self.femur_radius,
+            0.005,
+            0.03,
+            "must be between 5 and 30 mm (mid-shaft femur)",
+        )?;
+        ImagingError::in_range(
+            p,
+            "femur_lateral",
+            self.femur_lateral,
+            -0.05,
+            0.05,
+            "must be between -50 and 50 mm of the probe centre",
+        )?;
+        ImagingError::in_range(
+            p,
+            "cortex_thickness",
+            self.cortex_thickness,
+            0.0005,
+            0.015,
+            "must be between 0.5 and 15 mm (femoral cortex 4-7 mm)",
+        )?;
         if self.cortex_thickness >= self.femur_radius {
             return Err(ImagingError::invalid(
                 p,

@@ -36,36 +36,49 @@ pub struct ImagingConfig {
     /// Image rows (axial pixels, depth). Default 384.
     pub rows: usize,
     /// Lateral field of view, centred on the probe (m). Default 0.040.
+    /// Accepted: in 0.01 to 0.1 m (linear probe apertures).
     pub width: f64,
     /// Imaged depth below the probe face (m). Default 0.060.
+    /// Accepted: in 0.01 to 0.2 m (a thigh is imaged to 4-10 cm).
     pub depth: f64,
     /// Centre frequency of the pulse (Hz). Default 7.5e6.
+    /// Accepted: in 1e6 to 2e7 Hz (clinical B-mode probes).
     pub center_frequency: f64,
     /// Speed of sound assumed by the scanner (m/s). Default 1540.
+    /// Accepted: in 1400 to 1700 m/s (soft tissue 1450-1640, Duck 1990).
     pub sound_speed: f64,
     /// Axial full width at half maximum of the PSF envelope (m). Default 0.4e-3.
+    /// Accepted: in 1e-5 to 0.01 m (a PSF of 10 um to 10 mm).
     pub axial_fwhm: f64,
     /// Lateral full width at half maximum of the PSF envelope (m). Default 0.8e-3.
+    /// Accepted: in 1e-5 to 0.01 m (a PSF of 10 um to 10 mm).
     pub lateral_fwhm: f64,
     /// Attenuation slope compensated by the time-gain compensation
     /// (dB/(cm·MHz), one way; the TGC applies twice this, round trip). Default 0.65.
+    /// Accepted: in 0 to 2 dB/(cm MHz) (soft tissue 0.3-1.5, Duck 1990).
     pub tgc_attenuation: f64,
     /// Displayed dynamic range of the log compression (dB). Default 60.
+    /// Accepted: in 10 to 120 dB.
     pub dynamic_range: f64,
     /// Level of white above the mean echo of muscle (dB). Default 26.
+    /// Accepted: in 0 to 80 dB.
     pub headroom: f64,
     /// Scatterers per unit area of the section (1/m²). Default 4.0e7 (40 per mm²).
+    /// Accepted: in 1e5 to 1e9 1/m^2 (0.1 to 1000 per mm^2).
     pub scatterer_density: f64,
     /// Seed of the scatterer generator (same seed, same image). Default 7.
     pub seed: u64,
     /// Deepest indentation the scatterer field is prepared for (m): tissue
     /// down to `depth + max_indentation` below the skin is populated. Default 0.030.
+    /// Accepted: in 0 to 0.1 m (the soft tissue thickness).
     pub max_indentation: f64,
     /// Width of the probe face along the image plane (m), for the pressure
     /// under the face (must match `[probe]`). Default 0.040.
+    /// Accepted: in 0.01 to 0.1 m (linear probe apertures).
     pub probe_width: f64,
     /// Elevation (thickness) of the probe face across the image plane (m),
     /// for the pressure under the face (must match `[probe]`). Default 0.010.
+    /// Accepted: in 0.002 to 0.04 m (probe footprints).
     pub probe_elevation: f64,
     /// How far the image can pan laterally, each way (m): the anatomy is
     /// fixed in the thigh, the image centred on the probe, so sliding the
@@ -74,6 +87,7 @@ pub struct ImagingConfig {
     /// The scatterer field is prepared over `width + 2 · pan_range`; a probe
     /// farther than this from the vessels sees the field's edge (fat, muscle,
     /// no vessel). Default 0.050.
+    /// Accepted: in 0 to 0.2 m (around the thigh: its half-circumference is ~0.25 m).
     pub pan_range: f64,
     /// The anatomy of the section (`[imaging.anatomy]`).
     pub anatomy: AnatomyConfig,
@@ -122,12 +136,54 @@ impl ImagingConfig {
                 ));
             }
         }
-        ImagingError::positive(prefix, "width", self.width)?;
-        ImagingError::positive(prefix, "depth", self.depth)?;
-        ImagingError::positive(prefix, "center_frequency", self.center_frequency)?;
-        ImagingError::positive(prefix, "sound_speed", self.sound_speed)?;
-        ImagingError::positive(prefix, "axial_fwhm", self.axial_fwhm)?;
-        ImagingError::positive(prefix, "lateral_fwhm", self.lateral_fwhm)?;
+        ImagingError::in_range(
+            prefix,
+            "width",
+            self.width,
+            0.01,
+            0.1,
+            "must be between 0.01 and 0.1 m (linear probe apertures)",
+        )?;
+        ImagingError::in_range(
+            prefix,
+            "depth",
+            self.depth,
+            0.01,
+            0.2,
+            "must be between 0.01 and 0.2 m (a thigh is imaged to 4-10 cm)",
+        )?;
+        ImagingError::in_range(
+            prefix,
+            "center_frequency",
+            self.center_frequency,
+            1000000.0,
+            20000000.0,
+            "must be between 1e6 and 2e7 Hz (clinical B-mode probes)",
+        )?;
+        ImagingError::in_range(
+            prefix,
+            "sound_speed",
+            self.sound_speed,
+            1400.0,
+            1700.0,
+            "must be between 1400 and 1700 m/s (soft tissue 1450-1640, Duck 1990)",
+        )?;
+        ImagingError::in_range(
+            prefix,
+            "axial_fwhm",
+            self.axial_fwhm,
+            1e-05,
+            0.01,
+            "must be between 1e-5 and 0.01 m (a PSF of 10 um to 10 mm)",
+        )?;
+        ImagingError::in_range(
+            prefix,
+            "lateral_fwhm",
+            self.lateral_fwhm,
+            1e-05,
+            0.01,
+            "must be between 1e-5 and 0.01 m (a PSF of 10 um to 10 mm)",
+        )?;
         let dx = self.width / self.columns as f64;
         let dz = self.depth / self.rows as f64;
         if self.lateral_fwhm < dx || self.lateral_fwhm > 64.0 * dx {
@@ -146,7 +202,14 @@ impl ImagingConfig {
                 "must span 1 to 64 axial pixels (depth / rows)",
             ));
         }
-        ImagingError::non_negative(prefix, "tgc_attenuation", self.tgc_attenuation)?;
+        ImagingError::in_range(
+            prefix,
+            "tgc_attenuation",
+            self.tgc_attenuation,
+            0.0,
+            2.0,
+            "must be between 0 and 2 dB/(cm MHz) (soft tissue 0.3-1.5, Duck 1990)",
+        )?;
         ImagingError::in_range(
             prefix,
             "dynamic_range",
@@ -163,17 +226,45 @@ impl ImagingConfig {
             80.0,
             "must be between 0 and 80 dB",
         )?;
-        ImagingError::positive(prefix, "scatterer_density", self.scatterer_density)?;
-        ImagingError::non_negative(prefix, "max_indentation", self.max_indentation)?;
-        ImagingError::positive(prefix, "probe_width", self.probe_width)?;
-        ImagingError::positive(prefix, "probe_elevation", self.probe_elevation)?;
+        ImagingError::in_range(
+            prefix,
+            "scatterer_density",
+            self.scatterer_density,
+            100000.0,
+            1000000000.0,
+            "must be between 1e5 and 1e9 1/m^2 (0.1 to 1000 per mm^2)",
+        )?;
+        ImagingError::in_range(
+            prefix,
+            "max_indentation",
+            self.max_indentation,
+            0.0,
+            0.1,
+            "must be between 0 and 0.1 m (the soft tissue thickness)",
+        )?;
+        ImagingError::in_range(
+            prefix,
+            "probe_width",
+            self.probe_width,
+            0.01,
+            0.1,
+            "must be between 0.01 and 0.1 m (linear probe apertures)",
+        )?;
+        ImagingError::in_range(
+            prefix,
+            "probe_elevation",
+            self.probe_elevation,
+            0.002,
+            0.04,
+            "must be between 0.002 and 0.04 m (probe footprints)",
+        )?;
         ImagingError::in_range(
             prefix,
             "pan_range",
             self.pan_range,
             0.0,
-            1.0,
-            "must be between 0 and 1 m",
+            0.2,
+            "must be between 0 and 0.2 m (around the thigh: its half-circumference is ~0.25 m)",
         )?;
         let area =
             (self.width + 2.0 * self.pan_range + 0.01) * (self.depth + self.max_indentation + 0.01);

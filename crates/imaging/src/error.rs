@@ -99,7 +99,8 @@ impl ImagingError {
         if value.is_finite() && value >= lo && value <= hi {
             Ok(())
         } else {
-            Err(Self::invalid(prefix, field, value, reason))
+            // Debug keeps 1e308 short (Display writes all 309 digits).
+            Err(Self::invalid(prefix, field, format!("{value:?}"), reason))
         }
     }
 }

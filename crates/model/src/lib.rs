@@ -19,6 +19,7 @@
 
 pub mod bench;
 pub mod block_sparse;
+pub mod checkpoint;
 pub mod config;
 pub mod force_model;
 pub mod integrator;
@@ -33,6 +34,7 @@ pub mod tissue;
 pub type Vec3 = nalgebra::Vector3<f64>;
 
 pub use block_sparse::{BlockSparse, PatternError};
+pub use checkpoint::{DivergedError, MAX_POSITION, MAX_SPEED};
 pub use config::{ConfigError, IntegratorParams, ModelConfig, ThighGeometry, TissueParams};
 pub use force_model::{ForceModel, JacobianScratch, NoExtraForce, SumForce};
 pub use integrator::{Dynamics, ImplicitEuler, StepStats};

@@ -76,7 +76,8 @@ fn invalid_values_name_their_key() {
     let e = ModelConfig::from_toml_str("[tissue]\nareal_density = -1.0").unwrap_err();
     assert_eq!(
         e.to_string(),
-        "tissue.areal_density must be finite and > 0, got -1"
+        "tissue.areal_density must be in [1, 200] kg/m² (soft tissue ~1000 kg/m³ over 1 mm \
+         to 0.2 m), got -1.0"
     );
 }
 
@@ -115,4 +116,34 @@ fn round_trips_through_toml() {
     let c = ModelConfig::default();
     let text = toml::to_string(&c).unwrap();
     assert_eq!(ModelConfig::from_toml_str(&text).unwrap(), c);
+}
+
+/// Regression (issue 20): values that passed the sign checks but no
+/// physical range (a 1e308 m thigh, λ below ½ where the scheme is unstable,
+/// 1e9 Newton iterations) are refused naming the key, the range, its unit
+/// and its reason.
+#[test]
+fn physically_absurd_values_are_refused_with_range_unit_and_reason() {
+    let e = ModelConfig::from_toml_str("[thigh]\nlength = 1e308").unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "thigh.length must be in [0.1, 1] m (a human thigh segment), got 1e308"
+    );
+    let e = ModelConfig::from_toml_str("[integrator]\nlambda = 0.49").unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("integrator.lambda must be in [0.5, 1]"),
+        "{e}"
+    );
+    assert!(e.to_string().contains("unconditionally stable"), "{e}");
+    let e =
+        ModelConfig::from_toml_str("[integrator]\nnewton_max_iterations = 1000000000").unwrap_err();
+    assert!(
+        e.to_string()
+            .starts_with("integrator.newton_max_iterations must be in [1, 100]"),
+        "{e}"
+    );
+    let e = ModelConfig::from_toml_str("[thigh]\nfemur_offset = [0.0, -0.01, 99.0]").unwrap_err();
+    assert!(e.to_string().contains("exactly 2 numbers"), "{e}");
+    assert!(ModelConfig::from_toml_str("[integrator]\nlambda = 0.5").is_ok());
 }

@@ -13,9 +13,14 @@ pub struct CouplingConfig {
     /// force held between steps) or `direct` (physics at the haptic rate).
     /// Default `buffer`.
     pub mode: CouplingMode,
-    /// Physics rate in `buffer` and `hold` modes (Hz). Default 100 (the paper's).
+    /// Physics rate in `buffer` and `hold` modes (Hz), in [10, 1000]: below
+    /// 10 Hz the buffer model extrapolates a local model for longer than a
+    /// probe takes to cross it; above 1 kHz the physics outruns the haptic
+    /// loop it serves (the viewer's range too). Default 100 (the paper's).
     pub physics_rate: f64,
-    /// Haptic rate (Hz); also the physics rate in `direct` mode. Default 1000.
+    /// Haptic rate (Hz), in [100, 10 000] (haptic loops run 0.5–10 kHz; the
+    /// bound also caps a run's trace and, in `direct` mode, the physics
+    /// rate); also the physics rate in `direct` mode. Default 1000.
     pub haptic_rate: f64,
     /// Time the physics takes to deliver a step's sample after it read the
     /// probe pose, as a fraction of its period (dimensionless, 0..=1). A
@@ -24,7 +29,9 @@ pub struct CouplingConfig {
     /// measured compute time applies.
     pub compute_delay: f64,
     /// Time without a physics sample after which the haptic side reports its
-    /// peer silent and fades the force (s). Default 0.25.
+    /// peer silent and fades the force (s), in [0.01, 60] and at least two
+    /// physics periods (shorter, every gap between two samples would read as
+    /// a silence). Default 0.25.
     pub peer_timeout: f64,
 }
 
@@ -43,15 +50,25 @@ impl Default for CouplingConfig {
 impl CouplingConfig {
     /// Checks every field, naming the key.
     pub fn validate(&self, prefix: &str) -> Result<()> {
-        let finite_pos = |name: &str, v: f64| -> Result<()> {
-            if !v.is_finite() || v <= 0.0 {
-                bail!("{prefix}.{name} must be a finite number > 0, got {v}");
+        let range = |name: &str, v: f64, (lo, hi): (f64, f64), why: &str| -> Result<()> {
+            if !(v >= lo && v <= hi) {
+                bail!("{prefix}.{name} must be in [{lo}, {hi}] {why}, got {v:?}");
             }
             Ok(())
         };
-        finite_pos("physics_rate", self.physics_rate)?;
-        finite_pos("haptic_rate", self.haptic_rate)?;
-        finite_pos("peer_timeout", self.peer_timeout)?;
+        let physics = "Hz (the buffer model's useful range)";
+        range("physics_rate", self.physics_rate, (10.0, 1000.0), physics)?;
+        let haptic = "Hz (haptic loops run 0.5-10 kHz)";
+        range("haptic_rate", self.haptic_rate, (100.0, 1e4), haptic)?;
+        let silent = "s (from a few physics periods to a minute)";
+        range("peer_timeout", self.peer_timeout, (0.01, 60.0), silent)?;
+        if self.peer_timeout < 2.0 * self.physics_period() {
+            bail!(
+                "{prefix}.peer_timeout ({} s) must be at least two physics periods ({} s)",
+                self.peer_timeout,
+                2.0 * self.physics_period()
+            );
+        }
         if self.physics_rate > self.haptic_rate {
             bail!(
                 "{prefix}.physics_rate ({}) must not exceed {prefix}.haptic_rate ({})",

@@ -10,6 +10,7 @@ pub mod client;
 pub mod coupling;
 pub mod deploy;
 pub mod haptic_side;
+pub mod integrity;
 pub mod live;
 pub mod live_system;
 pub mod physics_loop;

@@ -117,6 +117,7 @@ pub fn physics_loop_with(
             if let Some(probe) = latest {
                 let started = Instant::now();
                 let (mut sample, mut rec) = physics.step(&probe, period, now);
+                physics.check()?;
                 rec.compute_time = started.elapsed().as_secs_f64();
                 rec.t = now;
                 sample.probe_seq = probe.header.seq;

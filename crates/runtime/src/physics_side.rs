@@ -94,6 +94,13 @@ impl PhysicsSide {
         (msg, rec)
     }
 
+    /// The state checkpoint after a step: an error naming the node and the
+    /// time if the model diverged (non-finite or runaway state), so that the
+    /// caller stops and reports instead of rendering from it.
+    pub fn check(&self) -> Result<()> {
+        self.model.check_state().map_err(anyhow::Error::new)
+    }
+
     /// The thigh model (deformed state).
     pub fn model(&self) -> &ThighModel {
         &self.model

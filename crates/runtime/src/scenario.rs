@@ -15,12 +15,24 @@ use echothigh_transport::{in_process_pair, FaultConfig, InProcessEndpoint};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// Largest accepted scenario file (bytes): the default scenario written out
+/// in full is ~5 KB; 1 MiB leaves room for a thousand exam phases and stops
+/// `--scenario /dev/zero` at once.
+pub const MAX_SCENARIO_BYTES: u64 = 1 << 20;
+
+/// Most haptic ticks a run records (`run.duration × coupling.haptic_rate`):
+/// an hour at 1 kHz. A tick record is ~120 bytes, so the trace stays below
+/// ~450 MB in memory and on disk.
+pub const MAX_TRACE_TICKS: f64 = 3.6e6;
+
 /// Run length and seed (`[run]`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RunConfig {
-    /// Simulated duration (s). Default 10 (the default exam: two presses,
-    /// holds and slides).
+    /// Simulated duration (s), in (0, 3600] and with at most
+    /// [`MAX_TRACE_TICKS`] haptic ticks (`duration × coupling.haptic_rate`),
+    /// since every tick is recorded. Default 10 (the default exam: two
+    /// presses, holds and slides).
     pub duration: f64,
     /// Seed of every random choice of the run (link faults, ...). Default 1.
     pub seed: u64,
@@ -113,8 +125,7 @@ impl Scenario {
                 Ok(s)
             }
             Some(p) => {
-                let text = std::fs::read_to_string(p)
-                    .with_context(|| format!("reading scenario {}", p.display()))?;
+                let text = read_bounded(p)?;
                 Self::from_toml_str(&text, &p.display().to_string())
             }
         }
@@ -147,6 +158,14 @@ impl Scenario {
         let d = self.run.duration;
         if !d.is_finite() || d <= 0.0 || d > 3600.0 {
             bail!("run.duration must be in (0, 3600] s, got {d}");
+        }
+        let ticks = d * self.coupling.haptic_rate;
+        if ticks > MAX_TRACE_TICKS {
+            bail!(
+                "run.duration = {d} s at coupling.haptic_rate = {} Hz records {ticks:.0} ticks, \
+                 more than the {MAX_TRACE_TICKS:.0} a run's trace holds (an hour at 1 kHz)",
+                self.coupling.haptic_rate
+            );
         }
         if (self.haptics.runner.rate_hz - self.coupling.haptic_rate).abs() > 1e-9 {
             bail!(
@@ -191,4 +210,24 @@ impl Scenario {
             integrator: self.integrator.clone(),
         }
     }
+}
+
+/// Reads a scenario file of at most [`MAX_SCENARIO_BYTES`], refusing a
+/// larger (or endless, like `/dev/zero`) input after reading one byte past
+/// the bound; errors name the file.
+pub fn read_bounded(path: &Path) -> Result<String> {
+    use std::io::Read;
+    let name = path.display();
+    let file = std::fs::File::open(path).with_context(|| format!("opening scenario {name}"))?;
+    let mut bytes = Vec::new();
+    file.take(MAX_SCENARIO_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .with_context(|| format!("reading scenario {name}"))?;
+    if bytes.len() as u64 > MAX_SCENARIO_BYTES {
+        bail!("scenario {name} is larger than {MAX_SCENARIO_BYTES} bytes (1 MiB); refused");
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        anyhow::anyhow!("scenario {name} is not UTF-8 text (invalid byte at offset {at})")
+    })
 }

@@ -171,6 +171,8 @@ impl<D: TickDevice> HapticTick<D> {
         let rendered = match self.direct.as_mut() {
             Some(physics) => {
                 let (sample, mut step) = physics.step(&probe, self.period, now);
+                // A diverged model ends the run with an error naming the node.
+                physics.check()?;
                 step.t = now;
                 observer.on_physics_step(physics, &probe, &step);
                 self.source.direct(Vec3::from(sample.force), p, 0.0)

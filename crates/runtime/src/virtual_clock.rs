@@ -238,6 +238,7 @@ impl VirtualWorld {
         if t + eps >= self.next_physics {
             if let (Some(probe), Some(physics)) = (self.latest_probe, self.physics.as_mut()) {
                 let (mut sample, mut rec) = physics.step(&probe, self.physics_period, t);
+                physics.check()?;
                 sample.probe_seq = probe.header.seq;
                 rec.t = t;
                 if self.steps.len() < self.steps.capacity() {

@@ -39,10 +39,13 @@ pub struct ConfigError {
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FaultConfig {
-    /// One-way minimum added delay (s), ≥ 0. Default 0.
+    /// One-way minimum added delay (s), in [0, 0.5]: teleoperation links
+    /// of interest are below ~0.5 s one way, and `latency + jitter` ≤ 1 s
+    /// keeps 1 kHz traffic within the delay line's
+    /// [`DEFAULT_DELAY_CAPACITY`] messages. Default 0.
     pub latency: f64,
-    /// Width of the uniform delay spread added to `latency` (s), ≥ 0.
-    /// Default 0.
+    /// Width of the uniform delay spread added to `latency` (s), in [0, 0.5]
+    /// (as `latency`). Default 0.
     pub jitter: f64,
     /// Probability that a message is lost, in [0, 1]. Default 0.
     pub loss: f64,
@@ -73,10 +76,13 @@ impl FaultConfig {
             reason,
         };
         for (field, value) in [("latency", self.latency), ("jitter", self.jitter)] {
-            if !value.is_finite() || value < 0.0 {
+            if !(0.0..=0.5).contains(&value) {
                 return Err(err(
                     field,
-                    format!("must be a finite duration ≥ 0 s, got {value}"),
+                    format!(
+                        "must be in [0, 0.5] s (teleoperation delays; with latency + jitter \
+                         <= 1 s the delay line holds 1 s of 1 kHz traffic), got {value:?}"
+                    ),
                 ));
             }
         }
@@ -84,7 +90,7 @@ impl FaultConfig {
             if !(0.0..=1.0).contains(&value) {
                 return Err(err(
                     field,
-                    format!("must be a probability in [0, 1], got {value}"),
+                    format!("must be in [0, 1] (a probability), got {value:?}"),
                 ));
             }
         }

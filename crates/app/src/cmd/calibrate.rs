@@ -6,7 +6,7 @@
 use anyhow::{Context, Result};
 use echothigh_contact::calibration::{calibrate, Calibration, FitParameter, IndentationCurve};
 use echothigh_experiments::plot::{Figure, Panel, Series, PALETTE};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `echothigh calibrate`.
 #[derive(clap::Args, Debug)]
@@ -26,7 +26,10 @@ pub struct Args {
         default_value = "normal_b,asymptote,structural_stiffness"
     )]
     fit: Vec<String>,
-    /// Physics step of the simulated experiment (s).
+    /// Physics step of the simulated experiment (s), in [1e-3, 0.1]: the
+    /// experiment is quasi-static (5 mm/s), so 1 ms already resolves it, and
+    /// the bound keeps an experiment to at most ~2e4 steps (each step
+    /// allocates nothing, but the fit runs dozens of experiments).
     #[arg(long, default_value_t = 0.05)]
     time_step: f64,
 }
@@ -45,13 +48,65 @@ fn parameter(name: &str) -> Result<FitParameter> {
     })
 }
 
+/// Checks up front, before a fit of several seconds, that the plot can be
+/// written: its directory exists and the file can be created (a file that
+/// did not exist is removed again).
+fn check_writable(out: &Path) -> Result<()> {
+    let existed = out.exists();
+    if out.is_dir() {
+        anyhow::bail!(
+            "--out {} is a directory; give a .png file name",
+            out.display()
+        );
+    }
+    std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(out)
+        .with_context(|| format!("--out {}: cannot write the plot there", out.display()))?;
+    if !existed {
+        // Only a probe; the plot is written after the fit.
+        let _ = std::fs::remove_file(out);
+    }
+    Ok(())
+}
+
+/// Refuses data deeper than the tissue up front: the probe would press
+/// through `thigh.tissue_thickness` (past the normal springs' asymptote
+/// and onto the femur), which no parameter can fit, and each simulated
+/// experiment would run `depth / (rate · time_step)` steps in vain (a
+/// 200 mm row ran for minutes).
+fn check_depths(data: &IndentationCurve, cal: &Calibration, path: &Path) -> Result<()> {
+    let thickness = cal.model.thigh.tissue_thickness;
+    if let Some((row, d)) = data
+        .depth
+        .iter()
+        .enumerate()
+        .find(|(_, d)| **d >= thickness)
+    {
+        anyhow::bail!(
+            "{}: data row {} has depth {:.1} mm, at or past the tissue's thickness \
+             (thigh.tissue_thickness = {:.1} mm): the probe would reach the femur",
+            path.display(),
+            row + 1,
+            d * 1e3,
+            thickness * 1e3
+        );
+    }
+    Ok(())
+}
+
 /// Runs the calibration.
 pub fn run(args: Args) -> Result<()> {
     anyhow::ensure!(
-        args.time_step.is_finite() && args.time_step > 0.0,
-        "--time-step must be a positive number of seconds, got {}",
+        (1e-3..=0.1).contains(&args.time_step),
+        "--time-step must be in [0.001, 0.1] s (a quasi-static experiment), got {}",
         args.time_step
     );
+    if let Some(out) = &args.out {
+        check_writable(out)?;
+    }
     let data = IndentationCurve::from_path(&args.data)
         .with_context(|| format!("reading {}", args.data.display()))?;
     let mut cal = Calibration {
@@ -63,6 +118,7 @@ pub fn run(args: Args) -> Result<()> {
         ..Calibration::default()
     };
     cal.experiment.time_step = args.time_step;
+    check_depths(&data, &cal, &args.data)?;
     println!(
         "fitting {} to {} points of {} ({} nodes)",
         cal.parameters

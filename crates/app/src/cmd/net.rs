@@ -39,11 +39,12 @@ pub struct ServerArgs {
     /// Scenario TOML (default: the built-in one).
     #[arg(long)]
     pub scenario: Option<PathBuf>,
-    /// How long to wait for the client (s).
-    #[arg(long, default_value_t = 60.0)]
+    /// How long to wait for the client (s): a number >= 0, or `inf` to wait
+    /// forever.
+    #[arg(long, default_value_t = 60.0, value_parser = parse_wait)]
     pub accept_timeout: f64,
-    /// Silence of the client after which the server stops (s).
-    #[arg(long, default_value_t = 2.0)]
+    /// Silence of the client after which the server stops (s), in [0.01, 60].
+    #[arg(long, default_value_t = 2.0, value_parser = parse_peer_timeout)]
     pub peer_timeout: f64,
     /// Stream the physics trace into this directory (`physics.csv`, flushed
     /// as it goes; every client's session is appended).
@@ -82,8 +83,8 @@ pub struct ClientArgs {
     /// Output directory (default: runs/client-<unix time>).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Handshake timeout (s).
-    #[arg(long, default_value_t = 5.0)]
+    /// Handshake timeout (s): a number >= 0, or `inf` to wait forever.
+    #[arg(long, default_value_t = 5.0, value_parser = parse_wait)]
     pub connect_timeout: f64,
 }
 
@@ -234,10 +235,12 @@ fn timeout_arg(flag: &str, seconds: f64) -> Result<Duration> {
     Duration::try_from_secs_f64(seconds).with_context(|| format!("{flag} = {seconds} s"))
 }
 
-/// A strictly positive, finite duration argument (s).
+/// The peer timeout (s), in [0.01, 60]: above a physics period, and below
+/// the 60 s of silence the transport's sequence bound allows for
+/// (`echothigh_transport::MAX_SEQ_JUMP`).
 fn positive_arg(flag: &str, seconds: f64) -> Result<f64> {
-    if !(seconds.is_finite() && seconds > 0.0) {
-        bail!("{flag} must be a finite number of seconds > 0, got {seconds}");
+    if !(seconds.is_finite() && (0.01..=60.0).contains(&seconds)) {
+        bail!("{flag} must be in [0.01, 60] s, got {seconds}");
     }
     Ok(seconds)
 }
@@ -337,4 +340,34 @@ pub fn client(args: ClientArgs) -> Result<()> {
         );
     }
     finish_run(&dir, &scenario, "processes", &recorded.ticks, &[], &out)
+}
+
+/// Parses a wait in seconds for `--accept-timeout` / `--connect-timeout`: a
+/// number >= 0, or `inf` (also `infinity`) for "wait forever". NaN and
+/// negative numbers are refused (they made `Duration::from_secs_f64` panic).
+pub fn parse_wait(text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number of seconds (or `inf`)"))?;
+    if v.is_nan() || v < 0.0 {
+        return Err(format!(
+            "must be >= 0 s or `inf` (wait forever), got {text}"
+        ));
+    }
+    Ok(v)
+}
+
+/// Parses `--peer-timeout`: seconds in [0.01, 60], the range of
+/// `coupling.peer_timeout` (a silence shorter than 10 ms is one missed
+/// datagram; longer than a minute the device would hold a stale force).
+pub fn parse_peer_timeout(text: &str) -> Result<f64, String> {
+    let v: f64 = text
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number of seconds"))?;
+    if !(0.01..=60.0).contains(&v) {
+        return Err(format!("must be in [0.01, 60] s, got {text}"));
+    }
+    Ok(v)
 }

@@ -144,6 +144,8 @@ pub fn finish_run(
     std::fs::write(&path, json + "\n").with_context(|| format!("writing {}", path.display()))?;
     plot_force(&dir.join("force.png"), &summary.mode, ticks, steps)?;
     report(dir, &summary);
+    echothigh_runtime::integrity::check_finite(ticks, steps)
+        .with_context(|| format!("the run diverged (data written to {})", dir.display()))?;
     verdict(dir, &summary)
 }
 

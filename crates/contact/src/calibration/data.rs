@@ -32,6 +32,20 @@ pub struct IndentationCurve {
 /// Minimum number of data rows accepted.
 pub const MIN_ROWS: usize = 3;
 
+/// Largest accepted calibration file (bytes): a force–indentation curve
+/// has tens to thousands of rows of ~20 bytes.
+pub const MAX_CSV_BYTES: u64 = 1 << 20;
+
+/// At most 40 characters of a field for an error message, with its length
+/// when cut (a 50 MB "number" was echoed whole).
+fn excerpt(text: &str) -> String {
+    const KEEP: usize = 40;
+    match text.char_indices().nth(KEEP) {
+        None => text.to_string(),
+        Some((cut, _)) => format!("{}… ({} bytes)", &text[..cut], text.len()),
+    }
+}
+
 impl IndentationCurve {
     /// Parses the CSV text described in the module docs.
     pub fn from_csv_str(text: &str) -> Result<Self, CsvError> {
@@ -46,10 +60,17 @@ impl IndentationCurve {
     }
 
     /// Parses CSV from any reader.
-    pub fn from_reader(mut r: impl Read) -> Result<Self, CsvError> {
+    /// Input beyond [`MAX_CSV_BYTES`] is refused.
+    pub fn from_reader(r: impl Read) -> Result<Self, CsvError> {
         let mut text = String::new();
-        r.read_to_string(&mut text)
+        r.take(MAX_CSV_BYTES + 1)
+            .read_to_string(&mut text)
             .map_err(|e| CsvError::Io(e.to_string()))?;
+        if text.len() as u64 > MAX_CSV_BYTES {
+            return Err(CsvError::Io(format!(
+                "the data is larger than {MAX_CSV_BYTES} bytes (1 MiB); refused"
+            )));
+        }
         let mut lines = text
             .lines()
             .enumerate()
@@ -92,7 +113,7 @@ impl IndentationCurve {
                     _ => Err(CsvError::NotANumber {
                         line,
                         column,
-                        text: text.to_string(),
+                        text: excerpt(text),
                     }),
                 }
             };

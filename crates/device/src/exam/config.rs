@@ -53,44 +53,50 @@ pub enum PhaseConfig {
     /// Move the setpoint in a straight line to `point` (m), which must lie
     /// above the skin, at `speed` (m/s).
     Approach {
-        /// Target point (m, thigh frame).
+        /// Target point (m, thigh frame), each component in [−1, 1] (within
+        /// a metre of the thigh's axis).
         point: [f64; 3],
-        /// Setpoint speed (m/s).
+        /// Setpoint speed (m/s), in [0.001, 1] (exam motions run mm/s to
+        /// ~0.5 m/s; 1 mm/s crosses the 2 m box in < 2000 s).
         speed: f64,
     },
     /// Move the setpoint along the press direction at `rate` (m/s) until the
     /// felt tissue force reaches `target_force` (N) or the probe is
     /// `max_depth` (m) below the skin.
     Press {
-        /// Setpoint speed along the press direction (m/s).
+        /// Setpoint speed along the press direction (m/s), in [0.001, 0.5].
         rate: f64,
-        /// Felt tissue force that ends the press (N).
+        /// Felt tissue force that ends the press (N), in [0.1, 100]
+        /// (compression ultrasound uses ~5–40 N).
         target_force: f64,
-        /// Probe depth below the skin that ends the press (m).
+        /// Probe depth below the skin that ends the press (m), in [0.001,
+        /// 0.1] (the soft tissue over the femur is at most ~0.1 m thick).
         max_depth: f64,
     },
     /// Keep the setpoint still for `duration` (s).
     Hold {
-        /// Duration (s).
+        /// Duration (s), in [0.001, 3600] (`[run] duration`'s bound).
         duration: f64,
     },
     /// Move the setpoint by `distance` (m) along `direction` at `speed` (m/s),
     /// keeping the press: the component of `direction` along the press
     /// direction is removed, so the setpoint's depth does not change.
     Slide {
-        /// Slide direction (normalized after removing its press component).
+        /// Slide direction (normalized after removing its press component),
+        /// each component in [−1000, 1000] (its square norm cannot overflow).
         direction: [f64; 3],
-        /// Distance (m).
+        /// Distance (m), in [0, 0.5] (along or around the thigh segment).
         distance: f64,
-        /// Speed (m/s).
+        /// Speed (m/s), in [0.001, 0.5].
         speed: f64,
     },
     /// Move the setpoint against the press direction at `speed` (m/s) until it
     /// is `clearance` (m) above the skin.
     Release {
-        /// Speed (m/s).
+        /// Speed (m/s), in [0.001, 1].
         speed: f64,
-        /// Height of the setpoint above the skin that ends the release (m).
+        /// Height of the setpoint above the skin that ends the release (m),
+        /// in [0, 0.1].
         clearance: f64,
     },
 }
@@ -101,19 +107,28 @@ pub enum PhaseConfig {
 #[serde(deny_unknown_fields, default)]
 pub struct ExamConfig {
     /// Initial hand setpoint (m, thigh frame). Default `[0, 0.092, -0.01]`
-    /// (20 mm above the skin at mid-thigh).
+    /// (20 mm above the skin at mid-thigh). Each component in [−1, 1] (within
+    /// a metre of the thigh's axis); exactly three elements.
+    #[serde(deserialize_with = "exact_array3")]
     pub start: [f64; 3],
     /// A point on the skin at the exam site (m). Default `[0, 0.072, -0.01]`
-    /// (top of the 72 mm semi-axis, middle of a 0.30 m segment).
+    /// (top of the 72 mm semi-axis, middle of a 0.30 m segment). Each
+    /// component in [−1, 1]; exactly three elements.
+    #[serde(deserialize_with = "exact_array3")]
     pub skin_point: [f64; 3],
-    /// Direction of the press, into the thigh (normalized). Default `[0, −1, 0]`.
+    /// Direction of the press, into the thigh (normalized), each component
+    /// in [−1000, 1000] and not zero. Default `[0, −1, 0]`.
+    #[serde(deserialize_with = "exact_array3")]
     pub press_direction: [f64; 3],
-    /// Number of times the phase list runs (≥ 1). Default 2.
+    /// Number of times the phase list runs, in [1, 1000]. Default 2.
     pub repeat: u32,
     /// The phases, in order. Default: approach 5 mm above the skin, press to
     /// 10 N at 40 mm/s (or 25 mm deep), hold 1 s, slide 20 mm along z at
     /// 10 mm/s, hold 0.5 s, release at 80 mm/s to 5 mm above the skin. Twice,
     /// that is ~9.8 s against a tissue of ~0.8 N/mm (7 s of it fixed).
+    /// Between 1 and [`MAX_PHASES`] phases. A phase that does not decode is
+    /// an error naming `exam.phases[i].field`.
+    #[serde(deserialize_with = "super::phases::deserialize_phases")]
     pub phases: Vec<PhaseConfig>,
 }
 
@@ -150,6 +165,20 @@ impl Default for ExamConfig {
     }
 }
 
+/// Most phases in a script.
+pub const MAX_PHASES: usize = 1000;
+
+/// Deserializes exactly three numbers: serde's `[f64; 3]` silently drops
+/// extra elements with the TOML decoder (`start = [0, 0.09, 0, 99]` was
+/// accepted).
+fn exact_array3<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 3], D::Error> {
+    use serde::de::Error;
+    let v = <Vec<f64> as Deserialize>::deserialize(d)?;
+    let len = v.len();
+    v.try_into()
+        .map_err(|_| D::Error::invalid_length(len, &"exactly 3 numbers"))
+}
+
 fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
@@ -182,75 +211,110 @@ impl ExamConfig {
     /// Checks every field, naming the offending key as `"{prefix}.{field}"`
     /// and phases as `"{prefix}.phases[i].{field}"`.
     pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
-        ConfigError::finite3(prefix, "start", self.start)?;
-        ConfigError::finite3(prefix, "skin_point", self.skin_point)?;
-        ConfigError::direction(prefix, "press_direction", self.press_direction)?;
-        if self.repeat == 0 {
-            return Err(ConfigError::invalid(prefix, "repeat", 0, "must be >= 1"));
-        }
-        if self.phases.is_empty() {
+        let p = prefix;
+        let point = "each component must be in [-1, 1] m (within a metre of the thigh)";
+        let dir = "each component must be in [-1000, 1000] (a direction)";
+        ConfigError::in_range3(p, "start", self.start, (-1.0, 1.0), point)?;
+        ConfigError::in_range3(p, "skin_point", self.skin_point, (-1.0, 1.0), point)?;
+        ConfigError::in_range3(p, "press_direction", self.press_direction, (-1e3, 1e3), dir)?;
+        ConfigError::direction(p, "press_direction", self.press_direction)?;
+        if !(1..=1000).contains(&self.repeat) {
             return Err(ConfigError::invalid(
-                prefix,
+                p,
+                "repeat",
+                self.repeat,
+                "must be in [1, 1000]",
+            ));
+        }
+        if self.phases.is_empty() || self.phases.len() > MAX_PHASES {
+            return Err(ConfigError::invalid(
+                p,
                 "phases",
-                "[]",
-                "needs at least one phase",
+                format!("{} phases", self.phases.len()),
+                "needs between 1 and 1000 phases",
             ));
         }
         let d = unit(self.press_direction);
         for (i, phase) in self.phases.iter().enumerate() {
             let p = format!("{prefix}.phases[{i}]");
-            match *phase {
-                PhaseConfig::Approach { point, speed } => {
-                    ConfigError::finite3(&p, "point", point)?;
-                    ConfigError::positive(&p, "speed", speed)?;
-                    let rel = [
-                        point[0] - self.skin_point[0],
-                        point[1] - self.skin_point[1],
-                        point[2] - self.skin_point[2],
-                    ];
-                    if dot(rel, d) >= 0.0 {
-                        return Err(ConfigError::invalid(
-                            &p,
-                            "point",
-                            format!("{point:?}"),
-                            "must lie above the skin (against press_direction from skin_point)",
-                        ));
-                    }
-                }
-                PhaseConfig::Press {
-                    rate,
-                    target_force,
-                    max_depth,
-                } => {
-                    ConfigError::positive(&p, "rate", rate)?;
-                    ConfigError::positive(&p, "target_force", target_force)?;
-                    ConfigError::positive(&p, "max_depth", max_depth)?;
-                }
-                PhaseConfig::Hold { duration } => ConfigError::positive(&p, "duration", duration)?,
-                PhaseConfig::Slide {
-                    direction,
-                    distance,
-                    speed,
-                } => {
-                    ConfigError::direction(&p, "direction", direction)?;
-                    let u = unit(direction);
-                    if dot(u, d).abs() > 0.99 {
-                        return Err(ConfigError::invalid(
-                            &p,
-                            "direction",
-                            format!("{direction:?}"),
-                            "must not be parallel to press_direction",
-                        ));
-                    }
-                    ConfigError::non_negative(&p, "distance", distance)?;
-                    ConfigError::positive(&p, "speed", speed)?;
-                }
-                PhaseConfig::Release { speed, clearance } => {
-                    ConfigError::positive(&p, "speed", speed)?;
-                    ConfigError::non_negative(&p, "clearance", clearance)?;
-                }
-            }
+            validate_phase(&p, phase, self.skin_point, d)?;
         }
         Ok(())
     }
+}
+
+/// Checks one phase against its documented ranges; `p` is
+/// `"{prefix}.phases[i]"`, `d` the unit press direction.
+fn validate_phase(
+    p: &str,
+    phase: &PhaseConfig,
+    skin_point: [f64; 3],
+    d: [f64; 3],
+) -> Result<(), ConfigError> {
+    let point = "each component must be in [-1, 1] m (within a metre of the thigh)";
+    let speed = "must be in [0.001, 1] m/s (exam motions)";
+    let slow = "must be in [0.001, 0.5] m/s (exam motions)";
+    match *phase {
+        PhaseConfig::Approach { point: x, speed: v } => {
+            ConfigError::in_range3(p, "point", x, (-1.0, 1.0), point)?;
+            ConfigError::in_range(p, "speed", v, (1e-3, 1.0), speed)?;
+            let rel = [
+                x[0] - skin_point[0],
+                x[1] - skin_point[1],
+                x[2] - skin_point[2],
+            ];
+            if dot(rel, d) >= 0.0 {
+                return Err(ConfigError::invalid(
+                    p,
+                    "point",
+                    format!("{x:?}"),
+                    "must lie above the skin (against press_direction from skin_point)",
+                ));
+            }
+        }
+        PhaseConfig::Press {
+            rate,
+            target_force,
+            max_depth,
+        } => {
+            ConfigError::in_range(p, "rate", rate, (1e-3, 0.5), slow)?;
+            let force = "must be in [0.1, 100] N (compression exams use ~5-40 N)";
+            ConfigError::in_range(p, "target_force", target_force, (0.1, 100.0), force)?;
+            let depth = "must be in [0.001, 0.1] m (the soft tissue's thickness)";
+            ConfigError::in_range(p, "max_depth", max_depth, (1e-3, 0.1), depth)?;
+        }
+        PhaseConfig::Hold { duration } => {
+            let hold = "must be in [0.001, 3600] s (the run's bound)";
+            ConfigError::in_range(p, "duration", duration, (1e-3, 3600.0), hold)?;
+        }
+        PhaseConfig::Slide {
+            direction,
+            distance,
+            speed: v,
+        } => {
+            let dir = "each component must be in [-1000, 1000] (a direction)";
+            ConfigError::in_range3(p, "direction", direction, (-1e3, 1e3), dir)?;
+            ConfigError::direction(p, "direction", direction)?;
+            if dot(unit(direction), d).abs() > 0.99 {
+                return Err(ConfigError::invalid(
+                    p,
+                    "direction",
+                    format!("{direction:?}"),
+                    "must not be parallel to press_direction",
+                ));
+            }
+            let dist = "must be in [0, 0.5] m (along or around the thigh)";
+            ConfigError::in_range(p, "distance", distance, (0.0, 0.5), dist)?;
+            ConfigError::in_range(p, "speed", v, (1e-3, 0.5), slow)?;
+        }
+        PhaseConfig::Release {
+            speed: v,
+            clearance,
+        } => {
+            ConfigError::in_range(p, "speed", v, (1e-3, 1.0), speed)?;
+            let clear = "must be in [0, 0.1] m (above the skin)";
+            ConfigError::in_range(p, "clearance", clearance, (0.0, 0.1), clear)?;
+        }
+    }
+    Ok(())
 }

@@ -2,6 +2,7 @@
 //! approach, press to a target force or depth, hold, slide, release, repeat.
 
 mod config;
+mod phases;
 mod script;
 
 pub use config::{ExamConfig, PhaseConfig};

@@ -1,10 +1,14 @@
 //! `[thigh]`: the thigh segment's geometry and the surface mesh resolution.
 
-use super::{in_range, key, positive, ConfigError};
+use super::{count_range, in_range, range, ConfigError};
 use serde::{Deserialize, Serialize};
 
-/// Largest accepted mesh (nodes), so a typo cannot ask for terabytes.
-pub const MAX_NODES: usize = 2_000_000;
+/// Largest accepted mesh (nodes). The physics must step a mesh at its rate
+/// (100 Hz in the paper) on one core: the default 1 008 nodes take a few ms
+/// per step, so 20 000 nodes (20× the default, ~0.5 mm spacing on a whole
+/// thigh segment) is far past real time already, and every per-node buffer
+/// (matrix blocks, PCG vectors) stays in the tens of MB.
+pub const MAX_NODES: usize = 20_000;
 
 /// Geometry of the thigh segment (a generalized cylinder around the femur)
 /// and the resolution of its surface mesh.
@@ -21,24 +25,40 @@ pub const MAX_NODES: usize = 2_000_000;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ThighGeometry {
-    /// Length of the segment along z (m). Default 0.30.
+    /// Length of the segment along z (m), in [0.1, 1.0]: a human thigh
+    /// segment (an adult femur is 0.4–0.5 m long). Default 0.30.
     pub length: f64,
-    /// Lateral (x) semi-axis of the elliptic cross-section (m). Default 0.080.
+    /// Lateral (x) semi-axis of the elliptic cross-section (m), in [0.03,
+    /// 0.25]: adult mid-thigh circumferences run ~0.35–1.0 m (anthropometric
+    /// surveys), i.e. radii 0.055–0.16 m; the range adds margin for
+    /// children and the obese. Default 0.080.
     pub semi_axis_x: f64,
-    /// Anterior (y) semi-axis of the elliptic cross-section (m). Default 0.072
-    /// (with 0.080: circumference ≈ 0.48 m).
+    /// Anterior (y) semi-axis of the elliptic cross-section (m), in [0.03,
+    /// 0.25] (as `semi_axis_x`). Default 0.072 (with 0.080: circumference
+    /// ≈ 0.48 m).
     pub semi_axis_y: f64,
-    /// Femur radius (m). Default 0.013.
+    /// Femur radius (m), in [0.005, 0.03]: mid-shaft femoral diameters are
+    /// 20–35 mm in adults (Duck 1990, ch. 5), 10 mm in small children.
+    /// Default 0.013.
     pub femur_radius: f64,
     /// Position `[x, y]` of the femur's axis in the cross-section (m).
-    /// Default `[0.0, -0.010]` (slightly posterior).
+    /// Each component within ± the larger semi-axis (the femur lies inside
+    /// the thigh). Exactly two elements. Default `[0.0, -0.010]` (slightly
+    /// posterior).
+    #[serde(deserialize_with = "super::exact_array")]
     pub femur_offset: [f64; 2],
     /// Rest length of the normal springs: distance from a surface node to its
-    /// anchor along the inward normal (m). Default 0.040.
+    /// anchor along the inward normal (m), in [0.005, 0.2]: soft tissue over
+    /// the femur is ~15–100 mm thick (skin + fat + muscle, imaging
+    /// anatomy); the femur check below bounds it further. Default 0.040.
     pub tissue_thickness: f64,
-    /// Number of nodes around the circumference (periodic in θ). Default 48.
+    /// Number of nodes around the circumference (periodic in θ), in [6, 1000]
+    /// (6: the coarsest ring that still has a top and sides; the node count
+    /// `n_theta · n_z` is bounded by [`MAX_NODES`]). Default 48.
     pub n_theta: usize,
-    /// Number of node rings along z, ends included. Default 21.
+    /// Number of node rings along z, ends included, in [3, 1000] (3: one free
+    /// ring between the held ends; the node count is bounded by
+    /// [`MAX_NODES`]). Default 21.
     pub n_z: usize,
     /// Hold the two end rings fixed (Dirichlet). Default true.
     pub hold_ends: bool,
@@ -104,34 +124,65 @@ impl ThighGeometry {
         ]
     }
 
-    /// Validates every field; errors name `{prefix}.{field}`.
+    /// Validates every field against its documented range; errors name
+    /// `{prefix}.{field}`.
     pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
-        positive(prefix, "length", self.length)?;
-        positive(prefix, "semi_axis_x", self.semi_axis_x)?;
-        positive(prefix, "semi_axis_y", self.semi_axis_y)?;
-        positive(prefix, "femur_radius", self.femur_radius)?;
-        positive(prefix, "tissue_thickness", self.tissue_thickness)?;
+        range(
+            prefix,
+            "length",
+            self.length,
+            (0.1, 1.0),
+            "m",
+            "a human thigh segment",
+        )?;
+        let radius = "a human thigh's half-width; circumferences 0.2–1.5 m";
+        range(
+            prefix,
+            "semi_axis_x",
+            self.semi_axis_x,
+            (0.03, 0.25),
+            "m",
+            radius,
+        )?;
+        range(
+            prefix,
+            "semi_axis_y",
+            self.semi_axis_y,
+            (0.03, 0.25),
+            "m",
+            radius,
+        )?;
+        let femur = "mid-shaft femoral radius of a child to a large adult";
+        range(
+            prefix,
+            "femur_radius",
+            self.femur_radius,
+            (0.005, 0.03),
+            "m",
+            femur,
+        )?;
+        let thick = "soft tissue between skin and femur";
+        range(
+            prefix,
+            "tissue_thickness",
+            self.tissue_thickness,
+            (0.005, 0.2),
+            "m",
+            thick,
+        )?;
         let r_max = self.semi_axis_x.max(self.semi_axis_y);
         for (i, c) in self.femur_offset.iter().enumerate() {
             in_range(prefix, &format!("femur_offset[{i}]"), *c, -r_max, r_max)?;
         }
-        if self.n_theta < 6 {
-            return Err(ConfigError::invalid(
-                key(prefix, "n_theta"),
-                format!("must be >= 6, got {}", self.n_theta),
-            ));
-        }
-        if self.n_z < 3 {
-            return Err(ConfigError::invalid(
-                key(prefix, "n_z"),
-                format!("must be >= 3, got {}", self.n_z),
-            ));
-        }
+        let ring = "mesh resolution; the node count is bounded too";
+        count_range(prefix, "n_theta", self.n_theta as u64, (6, 1000), ring)?;
+        count_range(prefix, "n_z", self.n_z as u64, (3, 1000), ring)?;
         if self.node_count() > MAX_NODES {
             return Err(ConfigError::invalid(
-                key(prefix, "n_theta"),
+                super::key(prefix, "n_theta"),
                 format!(
-                    "n_theta * n_z = {} exceeds the limit of {MAX_NODES} nodes",
+                    "n_theta * n_z = {} exceeds the limit of {MAX_NODES} nodes (a mesh the \
+                     physics cannot step in real time)",
                     self.node_count()
                 ),
             ));
@@ -146,7 +197,7 @@ impl ThighGeometry {
         let clearance = self.femur_radius / self.semi_axis_x.min(self.semi_axis_y);
         if inside.sqrt() + clearance >= 1.0 {
             return Err(ConfigError::invalid(
-                key(prefix, "femur_radius"),
+                super::key(prefix, "femur_radius"),
                 format!(
                     "the femur (radius {} m at [{fx}, {fy}]) does not fit inside the skin",
                     self.femur_radius
@@ -159,7 +210,7 @@ impl ThighGeometry {
             let dist = (ax - fx).hypot(ay - fy);
             if dist <= self.femur_radius {
                 return Err(ConfigError::invalid(
-                    key(prefix, "tissue_thickness"),
+                    super::key(prefix, "tissue_thickness"),
                     format!(
                         "= {} m puts the anchor at θ = {theta:.3} rad inside the femur \
                          ({dist:.4} m from its axis < femur_radius {} m)",

@@ -52,26 +52,68 @@ pub(crate) fn key(prefix: &str, field: &str) -> String {
     }
 }
 
-/// Checks `value > 0` and finite.
-pub(crate) fn positive(prefix: &str, field: &str, value: f64) -> Result<(), ConfigError> {
-    if value.is_finite() && value > 0.0 {
+/// Deserializes a fixed-size array of exactly `N` numbers. serde's own
+/// `[f64; N]` reads the first `N` elements and, with the TOML decoder,
+/// silently drops any more (`femur_offset = [0, -0.01, 99]` was accepted);
+/// here a sequence of another length is an error naming its length.
+pub(crate) fn exact_array<'de, D, const N: usize>(d: D) -> Result<[f64; N], D::Error>
+where
+    D: serde::Deserializer<'de>,
+{
+    use serde::de::Error;
+    let v = <Vec<f64> as Deserialize>::deserialize(d)?;
+    let len = v.len();
+    v.try_into()
+        .map_err(|_| D::Error::invalid_length(len, &format!("exactly {N} numbers").as_str()))
+}
+
+/// Checks `lo <= value <= hi` (NaN fails), stating the unit and the reason
+/// for the range in the message, e.g. `thigh.length must be in [0.1, 1] m (a
+/// human thigh segment), got 1e308`.
+pub(crate) fn range(
+    prefix: &str,
+    field: &str,
+    value: f64,
+    (lo, hi): (f64, f64),
+    unit: &str,
+    why: &str,
+) -> Result<(), ConfigError> {
+    if value >= lo && value <= hi {
         Ok(())
     } else {
         Err(ConfigError::invalid(
             key(prefix, field),
-            format!("must be finite and > 0, got {value}"),
+            format!(
+                "must be in [{lo}, {hi}]{}{unit} ({why}), got {value:?}",
+                sp(unit)
+            ),
         ))
     }
 }
 
-/// Checks `value >= 0` and finite.
-pub(crate) fn non_negative(prefix: &str, field: &str, value: f64) -> Result<(), ConfigError> {
-    if value.is_finite() && value >= 0.0 {
+/// A space before a non-empty unit.
+fn sp(unit: &str) -> &'static str {
+    if unit.is_empty() {
+        ""
+    } else {
+        " "
+    }
+}
+
+/// Checks `lo <= value <= hi` for an integer count, with the reason.
+pub(crate) fn count_range(
+    prefix: &str,
+    field: &str,
+    value: u64,
+    (lo, hi): (u64, u64),
+    why: &str,
+) -> Result<(), ConfigError> {
+    if (lo..=hi).contains(&value) {
         Ok(())
     } else {
         Err(ConfigError::invalid(
             key(prefix, field),
-            format!("must be finite and >= 0, got {value}"),
+            format!("must be in [{lo}, {hi}] ({why}), got {value}"),
         ))
     }
 }
@@ -89,7 +131,7 @@ pub(crate) fn in_range(
     } else {
         Err(ConfigError::invalid(
             key(prefix, field),
-            format!("must be in [{lo}, {hi}], got {value}"),
+            format!("must be in [{lo}, {hi}], got {value:?}"),
         ))
     }
 }

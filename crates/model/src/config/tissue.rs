@@ -1,7 +1,7 @@
 //! `[tissue]`: lumped masses, linear membrane springs and dampers, nonlinear
 //! normal springs (paper §3).
 
-use super::{non_negative, positive, ConfigError};
+use super::{range, ConfigError};
 use serde::{Deserialize, Serialize};
 
 /// Tissue parameters, all resolution independent.
@@ -39,36 +39,60 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct TissueParams {
-    /// Mass per unit skin area carried by the surface nodes (kg/m²). Default 10.
+    /// Mass per unit skin area carried by the surface nodes (kg/m²), in [1,
+    /// 200]: soft tissue of density ~1 000 kg/m³ (Duck 1990) over 1 mm to
+    /// 0.2 m of moving thickness. Default 10.
     pub areal_density: f64,
-    /// Membrane modulus of the structural springs (θ and z neighbours) (N/m). Default 100.8 (calibrated, see below).
+    /// Membrane modulus of the structural springs (θ and z neighbours)
+    /// (N/m), in [1, 1e5]: skin's Young's modulus ~0.1–10 MPa (Duck 1990)
+    /// times its ~2 mm thickness gives 2e2–2e4 N/m; the calibrated default is
+    /// lower (the fat below is softer), and 1e5 leaves margin. Default 100.8
+    /// (calibrated, see below).
     pub structural_stiffness: f64,
-    /// Membrane modulus of the shear springs (quad diagonals) (N/m). Default 50.
+    /// Membrane modulus of the shear springs (quad diagonals) (N/m), in [0,
+    /// 1e5] (as `structural_stiffness`; 0 = no shear springs). Default 50.
     pub shear_stiffness: f64,
-    /// Membrane modulus of the bending springs (second neighbours in θ and z) (N/m). Default 20.
+    /// Membrane modulus of the bending springs (second neighbours in θ and
+    /// z) (N/m), in [0, 1e5] (as `structural_stiffness`). Default 20.
     pub bending_stiffness: f64,
-    /// Damping modulus of the structural springs' dampers (N·s/m). Default 0.2.
+    /// Damping modulus of the structural springs' dampers (N·s/m), in [0,
+    /// 100]: with `areal_density` ≥ 1 kg/m² this spans from undamped to
+    /// far past critical damping of the membrane modes at the mesh scale.
+    /// Default 0.2.
     pub structural_damping: f64,
-    /// Damping modulus of the shear springs' dampers (N·s/m). Default 0.05.
+    /// Damping modulus of the shear springs' dampers (N·s/m), in [0, 100].
+    /// Default 0.05.
     pub shear_damping: f64,
-    /// Damping modulus of the bending springs' dampers (N·s/m). Default 0.02.
+    /// Damping modulus of the bending springs' dampers (N·s/m), in [0, 100].
+    /// Default 0.02.
     pub bending_damping: f64,
-    /// Normal spring `a` per unit area (m²/N = 1/Pa). Default 7.638e-5.
+    /// Normal spring `a` per unit area (m²/N = 1/Pa), in [1e-7, 1e-2]: `1/a`
+    /// is the tension the layer saturates at, from 100 Pa (fat) to 10 MPa
+    /// (tendon); the asymptote `b/a` must also lie inside the tissue.
+    /// Default 7.638e-5.
     pub normal_a: f64,
     /// Normal spring `b` per unit area (m³/N = m/Pa): `1/normal_b` is the
-    /// initial stiffness per unit area. Default 2.865e-6 (asymptote 37.5 mm).
+    /// initial stiffness per unit area, in [1e-9, 1e-3]: soft tissue moduli
+    /// of 1 kPa–1 MPa (Duck 1990) over 1 mm–0.2 m of thickness give
+    /// `E / L` of 5e3–1e9 Pa/m. Default 2.865e-6 (asymptote 37.5 mm).
     pub normal_b: f64,
-    /// Normal damper per unit area (N·s/m³): node damping = this × node area. Default 2000.
+    /// Normal damper per unit area (N·s/m³): node damping = this × node area,
+    /// in [0, 1e6] (from none to ~100× critical damping of the default layer:
+    /// `2 √(ρ_A / normal_b)` ≈ 3.7e3). Default 2000.
     pub normal_damping: f64,
     /// Tangential (shear) stiffness of the tissue layer per unit area (N/m³):
     /// node value = this × node area. Default 1.0e6 (raised from 1e5 by the
     /// calibration: with less, the skin under a pressed probe slides sideways
-    /// past ~15 mm on the default mesh).
+    /// past ~15 mm on the default mesh). In [0, 1e9] (as `1 / normal_b`).
     pub tangential_stiffness: f64,
-    /// Tangential damping per unit area (N·s/m³). Default 500.
+    /// Tangential damping per unit area (N·s/m³), in [0, 1e6] (as
+    /// `normal_damping`). Default 500.
     pub tangential_damping: f64,
-    /// Gravity acceleration (m/s²). Default `[0, 0, 0]`: the rest shape is the
-    /// thigh as observed, i.e. already in equilibrium under gravity.
+    /// Gravity acceleration (m/s²), each component in [−20, 20] (up to ~2 g:
+    /// the Earth's, tilted any way, with margin). Exactly three elements.
+    /// Default `[0, 0, 0]`: the rest shape is the thigh as observed, i.e.
+    /// already in equilibrium under gravity.
+    #[serde(deserialize_with = "super::exact_array")]
     pub gravity: [f64; 3],
 }
 
@@ -98,27 +122,102 @@ impl TissueParams {
         self.normal_b / self.normal_a
     }
 
-    /// Validates every field; errors name `{prefix}.{field}`.
+    /// Validates every field against its documented range; errors name
+    /// `{prefix}.{field}`.
     pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {
-        positive(prefix, "areal_density", self.areal_density)?;
-        positive(prefix, "structural_stiffness", self.structural_stiffness)?;
-        non_negative(prefix, "shear_stiffness", self.shear_stiffness)?;
-        non_negative(prefix, "bending_stiffness", self.bending_stiffness)?;
-        non_negative(prefix, "structural_damping", self.structural_damping)?;
-        non_negative(prefix, "shear_damping", self.shear_damping)?;
-        non_negative(prefix, "bending_damping", self.bending_damping)?;
-        positive(prefix, "normal_a", self.normal_a)?;
-        positive(prefix, "normal_b", self.normal_b)?;
-        non_negative(prefix, "normal_damping", self.normal_damping)?;
-        non_negative(prefix, "tangential_stiffness", self.tangential_stiffness)?;
-        non_negative(prefix, "tangential_damping", self.tangential_damping)?;
+        let p = prefix;
+        let rho = "soft tissue ~1000 kg/m³ over 1 mm to 0.2 m";
+        range(
+            p,
+            "areal_density",
+            self.areal_density,
+            (1.0, 200.0),
+            "kg/m²",
+            rho,
+        )?;
+        let membrane = "skin's modulus times its thickness, with margin";
+        range(
+            p,
+            "structural_stiffness",
+            self.structural_stiffness,
+            (1.0, 1e5),
+            "N/m",
+            membrane,
+        )?;
+        range(
+            p,
+            "shear_stiffness",
+            self.shear_stiffness,
+            (0.0, 1e5),
+            "N/m",
+            membrane,
+        )?;
+        range(
+            p,
+            "bending_stiffness",
+            self.bending_stiffness,
+            (0.0, 1e5),
+            "N/m",
+            membrane,
+        )?;
+        let damp = "undamped to far past critical at the mesh scale";
+        range(
+            p,
+            "structural_damping",
+            self.structural_damping,
+            (0.0, 100.0),
+            "N·s/m",
+            damp,
+        )?;
+        range(
+            p,
+            "shear_damping",
+            self.shear_damping,
+            (0.0, 100.0),
+            "N·s/m",
+            damp,
+        )?;
+        range(
+            p,
+            "bending_damping",
+            self.bending_damping,
+            (0.0, 100.0),
+            "N·s/m",
+            damp,
+        )?;
+        let sat = "1/a is the saturation tension, 100 Pa to 10 MPa";
+        range(p, "normal_a", self.normal_a, (1e-7, 1e-2), "1/Pa", sat)?;
+        let stiff = "1/b from 1e3 to 1e9 Pa/m: soft tissue moduli over its thickness";
+        range(p, "normal_b", self.normal_b, (1e-9, 1e-3), "m/Pa", stiff)?;
+        let ndamp = "none to ~100x the critical damping of the layer";
+        range(
+            p,
+            "normal_damping",
+            self.normal_damping,
+            (0.0, 1e6),
+            "N·s/m³",
+            ndamp,
+        )?;
+        let tan = "as 1/normal_b";
+        range(
+            p,
+            "tangential_stiffness",
+            self.tangential_stiffness,
+            (0.0, 1e9),
+            "N/m³",
+            tan,
+        )?;
+        range(
+            p,
+            "tangential_damping",
+            self.tangential_damping,
+            (0.0, 1e6),
+            "N·s/m³",
+            ndamp,
+        )?;
         for (i, g) in self.gravity.iter().enumerate() {
-            if !g.is_finite() {
-                return Err(ConfigError::invalid(
-                    super::key(prefix, &format!("gravity[{i}]")),
-                    format!("must be finite, got {g}"),
-                ));
-            }
+            let field = format!("gravity[{i}]");
+            range(p, &field, *g, (-20.0, 20.0), "m/s²", "up to ~2 g")?;
         }
         Ok(())
     }
