@@ -219,6 +219,38 @@ fn draw_panel<DB: DrawingBackend>(
     Ok(())
 }
 
+/// Writes the force magnitude over time as a PNG: the rendered force and the
+/// physics' own contact force.
+pub fn plot_force(
+    path: &std::path::Path,
+    mode: &str,
+    ticks: &[echothigh_runtime::trace::TickRecord],
+    physics: &[echothigh_runtime::trace::PhysicsRecord],
+) -> Result<()> {
+    let f = echothigh_runtime::trace::force_magnitudes(ticks);
+    let rendered: Vec<(f64, f64)> = ticks.iter().zip(&f).map(|(r, f)| (r.t, *f)).collect();
+    let phys: Vec<(f64, f64)> = physics
+        .iter()
+        .map(|r| {
+            (
+                r.t,
+                (r.force[0].powi(2) + r.force[1].powi(2) + r.force[2].powi(2)).sqrt(),
+            )
+        })
+        .collect();
+    let fig = Figure::new(vec![Panel {
+        title: format!("Force magnitude ({mode} coupling)"),
+        x_label: "time (s)".into(),
+        y_label: "force (N, tissue)".into(),
+        series: vec![
+            Series::line("rendered (1 kHz)", rendered, PALETTE[0]),
+            Series::line("physics contact force", phys, PALETTE[1]).dashed(),
+        ],
+        ..Default::default()
+    }]);
+    fig.save_png(path)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -252,36 +284,4 @@ mod tests {
         assert!(dark > 1000, "only {dark} dark bytes");
         std::fs::remove_dir_all(&dir).ok();
     }
-}
-
-/// Writes the force magnitude over time as a PNG: the rendered force and the
-/// physics' own contact force.
-pub fn plot_force(
-    path: &std::path::Path,
-    mode: &str,
-    ticks: &[echothigh_runtime::trace::TickRecord],
-    physics: &[echothigh_runtime::trace::PhysicsRecord],
-) -> Result<()> {
-    let f = echothigh_runtime::trace::force_magnitudes(ticks);
-    let rendered: Vec<(f64, f64)> = ticks.iter().zip(&f).map(|(r, f)| (r.t, *f)).collect();
-    let phys: Vec<(f64, f64)> = physics
-        .iter()
-        .map(|r| {
-            (
-                r.t,
-                (r.force[0].powi(2) + r.force[1].powi(2) + r.force[2].powi(2)).sqrt(),
-            )
-        })
-        .collect();
-    let fig = Figure::new(vec![Panel {
-        title: format!("Force magnitude ({mode} coupling)"),
-        x_label: "time (s)".into(),
-        y_label: "force (N, tissue)".into(),
-        series: vec![
-            Series::line("rendered (1 kHz)", rendered, PALETTE[0]),
-            Series::line("physics contact force", phys, PALETTE[1]).dashed(),
-        ],
-        ..Default::default()
-    }]);
-    fig.save_png(path)
 }

@@ -106,12 +106,15 @@ impl Streams {
     };
 }
 
+/// Writes one record as a CSV row.
+type RowWriter<T> = Box<dyn FnMut(&mut dyn Write, &T) -> std::io::Result<()> + Send>;
+
 /// One CSV file the writer streams to.
 struct CsvStream<T> {
     path: PathBuf,
     out: BufWriter<File>,
     ring: rtrb::Consumer<T>,
-    row: Box<dyn FnMut(&mut dyn Write, &T) -> std::io::Result<()> + Send>,
+    row: RowWriter<T>,
     kept: Vec<T>,
 }
 
