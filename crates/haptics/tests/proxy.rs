@@ -19,16 +19,18 @@ fn publish(tx: &mut ModelPublisher, params: ModelParams, k: f64, seq: u64, t: f6
     });
 }
 
-/// Renderer with safety limits out of the way (the proxy is under test).
+/// Renderer with safety limits out of the way (the proxy is under test):
+/// the widest values the configuration accepts (200 N, 1e12 N/s, 5 s),
+/// far beyond what these paths reach (≤ 500 N/m × a few cm ≈ 10 N, 1 s).
 fn renderer(mu_s: f64, mu_k: f64, params: ModelParams) -> HapticRenderer {
     let (mut tx, rx) = handoff();
     publish(&mut tx, params, 500.0, 1, 0.0);
     let cfg = RenderConfig {
         static_friction: mu_s,
         kinetic_friction: mu_k,
-        max_force: 1e9,
-        force_rate_limit: 1e15,
-        stale_age: 1e9,
+        max_force: 200.0,
+        force_rate_limit: 1e12,
+        stale_age: 5.0,
         ..RenderConfig::default()
     };
     HapticRenderer::new(&cfg, rx).unwrap()
