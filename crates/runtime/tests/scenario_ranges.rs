@@ -74,7 +74,7 @@ const KEYS: &[Key] = &[
     f("integrator.lambda", 0.5, 1.0),
     f("integrator.time_step", 1e-4, 0.1),
     f("integrator.newton_tol", 1e-12, 0.5),
-    f("integrator.newton_floor", 1e-14, 1e-6),
+    f("integrator.newton_floor", 0.0, 1e-6),
     i("integrator.newton_max_iterations", 1.0, 100.0),
     f("integrator.cg_tol", 1e-12, 0.5),
     f("integrator.stiffness_tol", 1e-12, 0.5),
@@ -106,7 +106,8 @@ const KEYS: &[Key] = &[
     f("haptics.render.max_force", 0.1, 200.0),
     f("haptics.render.force_rate_limit", 10.0, 1e12),
     f("haptics.render.stale_age", 0.0, 5.0),
-    f("haptics.render.fade_time", 0.0, 5.0),
+    f("haptics.render.fade_time", 1e-3, 5.0),
+    f("haptics.render.max_tick_interval", 1e-5, 0.1),
     Key {
         path: "haptics.loop.rate_hz",
         lo: 100.0,

@@ -78,6 +78,7 @@ pub fn run(args: Args) -> Result<()> {
     let control: Arc<dyn LiveControl> = system.clone();
     let config = ServerConfig {
         state_rate: args.rate,
+        allow_remote: args.allow_remote,
     };
     let addr = SocketAddr::new(args.bind, args.port);
     let served = tokio::runtime::Builder::new_current_thread()

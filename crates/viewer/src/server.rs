@@ -28,11 +28,17 @@ use std::time::Duration;
 pub struct ServerConfig {
     /// Rate at which each connection receives the state (Hz, 1..=120).
     pub state_rate: f64,
+    /// Accept any `Host` (the server was bound to a non-loopback address on
+    /// purpose, `--allow-remote`); otherwise only loopback host names.
+    pub allow_remote: bool,
 }
 
 impl Default for ServerConfig {
     fn default() -> Self {
-        Self { state_rate: 40.0 }
+        Self {
+            state_rate: 40.0,
+            allow_remote: false,
+        }
     }
 }
 
@@ -106,8 +112,57 @@ pub fn router(state: Arc<AppState>) -> Router {
         .with_state(state)
 }
 
+/// Whether the request's `Host` names this machine's loopback
+/// (`localhost`, `127.0.0.0/8`, `[::1]`, with any port). A page on another
+/// site that a DNS-rebinding attack points at 127.0.0.1 still sends its own
+/// host name, so checking `Origin` against `Host` alone lets it through
+/// (issue 20, item 8); requiring a loopback `Host` does not.
+pub fn loopback_host(headers: &HeaderMap) -> bool {
+    let Some(host) = headers.get(header::HOST).and_then(|h| h.to_str().ok()) else {
+        return false;
+    };
+    let name = if let Some(rest) = host.strip_prefix('[') {
+        // [v6]:port
+        match rest.split_once(']') {
+            Some((v6, _)) => {
+                return v6
+                    .parse::<std::net::Ipv6Addr>()
+                    .is_ok_and(|a| a.is_loopback())
+            }
+            None => return false,
+        }
+    } else {
+        host.rsplit_once(':').map_or(host, |(n, port)| {
+            if port.chars().all(|c| c.is_ascii_digit()) {
+                n
+            } else {
+                host
+            }
+        })
+    };
+    name.eq_ignore_ascii_case("localhost")
+        || name
+            .parse::<std::net::Ipv4Addr>()
+            .is_ok_and(|a| a.is_loopback())
+}
+
+/// Refuses a request whose `Host` is not loopback, unless remote access was
+/// allowed.
+fn host_refused(app: &AppState, headers: &HeaderMap) -> Option<Response> {
+    (!app.config.allow_remote && !loopback_host(headers)).then(|| {
+        (
+            StatusCode::FORBIDDEN,
+            "refused: Host is not a loopback name (start with --allow-remote to serve other names)",
+        )
+            .into_response()
+    })
+}
+
 /// Serves an embedded file, or 404.
-async fn serve_asset(uri: Uri) -> Response {
+async fn serve_asset(uri: Uri, headers: HeaderMap, State(app): State<Arc<AppState>>) -> Response {
+    if let Some(r) = host_refused(&app, &headers) {
+        return r;
+    }
     match assets::lookup(uri.path()) {
         Some(a) => (
             [
@@ -146,6 +201,9 @@ async fn ws_upgrade(
     headers: HeaderMap,
     State(app): State<Arc<AppState>>,
 ) -> Response {
+    if let Some(r) = host_refused(&app, &headers) {
+        return r;
+    }
     if !same_origin(&headers) {
         return (StatusCode::FORBIDDEN, "cross-origin WebSocket refused").into_response();
     }

@@ -119,12 +119,12 @@ impl IntegratorParams {
         range(prefix, "time_step", self.time_step, (1e-4, 0.1), "s", step)?;
         let rel = "a relative residual reduction";
         range(prefix, "newton_tol", self.newton_tol, (1e-12, 0.5), "", rel)?;
-        let floor = "a fraction of the model's size: from rounding noise to 1 µm in 1 m";
+        let floor = "a fraction of the model's size: 0 (no floor) to 1 µm in 1 m";
         range(
             prefix,
             "newton_floor",
             self.newton_floor,
-            (1e-14, 1e-6),
+            (0.0, 1e-6),
             "",
             floor,
         )?;

@@ -4,7 +4,9 @@
 
 use super::super::fake::FakeLive;
 use super::super::protocol::{Envelope, FrameHeader, FrameKind, ServerMessage, ViewState};
+use super::super::server::loopback_host;
 use super::super::{check_bind, check_rate, serve_on, ServerConfig};
+use axum::http::{header, HeaderMap};
 use echothigh_runtime::live::{LiveCommand, LiveControl, VeinKind};
 use futures_util::{SinkExt, StreamExt};
 use std::sync::Arc;
@@ -19,7 +21,10 @@ type Client =
 async fn start(fake: Arc<FakeLive>) -> std::net::SocketAddr {
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let addr = listener.local_addr().unwrap();
-    let config = ServerConfig { state_rate: 100.0 };
+    let config = ServerConfig {
+        state_rate: 100.0,
+        allow_remote: false,
+    };
     tokio::spawn(serve_on(listener, fake, config, std::future::pending()));
     addr
 }
@@ -226,6 +231,48 @@ async fn cross_origin_websocket_is_refused() {
     req.headers_mut()
         .insert("origin", format!("http://{addr}").parse().unwrap());
     assert!(tokio_tungstenite::connect_async(req).await.is_ok());
+}
+
+/// DNS rebinding (issue 20, item 8): a page on evil.example whose name now
+/// resolves to 127.0.0.1 sends `Host: evil.example:port` with a matching
+/// `Origin`; the server refuses it (403) on the WebSocket and the page.
+#[tokio::test]
+async fn dns_rebinding_host_is_refused() {
+    let addr = start(Arc::new(FakeLive::new())).await;
+    let port = addr.port();
+    let evil = format!("evil.example:{port}");
+    let mut req = format!("ws://{addr}/ws").into_client_request().unwrap();
+    req.headers_mut().insert("host", evil.parse().unwrap());
+    req.headers_mut()
+        .insert("origin", format!("http://{evil}").parse().unwrap());
+    match tokio_tungstenite::connect_async(req).await {
+        Err(tokio_tungstenite::tungstenite::Error::Http(r)) => assert_eq!(r.status(), 403),
+        other => panic!(
+            "rebinding WebSocket not refused with 403: {:?}",
+            other.map(|_| ())
+        ),
+    }
+    let mut s = tokio::net::TcpStream::connect(addr).await.unwrap();
+    let req = format!("GET / HTTP/1.1\r\nHost: {evil}\r\nConnection: close\r\n\r\n");
+    s.write_all(req.as_bytes()).await.unwrap();
+    let mut out = Vec::new();
+    s.read_to_end(&mut out).await.unwrap();
+    assert!(String::from_utf8_lossy(&out).starts_with("HTTP/1.1 403"));
+    for ok in ["localhost:8080", "127.0.0.1", "127.1.2.3:9", "[::1]:8080"] {
+        let mut h = HeaderMap::new();
+        h.insert(header::HOST, ok.parse().unwrap());
+        assert!(loopback_host(&h), "{ok} is loopback");
+    }
+    for bad in [
+        "evil.example",
+        "localhost.evil.example:80",
+        "10.0.0.1:8080",
+        "[::2]:1",
+    ] {
+        let mut h = HeaderMap::new();
+        h.insert(header::HOST, bad.parse().unwrap());
+        assert!(!loopback_host(&h), "{bad} is not loopback");
+    }
 }
 
 async fn http_get(addr: std::net::SocketAddr, path: &str) -> String {
