@@ -278,3 +278,44 @@ fn echo_round_trips_over_loopback() {
     assert!(stats.received >= 100);
     assert!(rtts.iter().all(|&r| r > 0.0 && r < 2.0));
 }
+
+/// Issue 20, item 1: the server reads its clock before the accept wait; a
+/// client that arrives later than the peer timeout must not be taken as
+/// already silent. The Hello is heard at the caller's clock plus the wait
+/// (`now` + elapsed), so 3 s after a wait that began at t = 0 the session
+/// is fresh for a 2 s peer timeout (here 2.6 s after). Fails when `accept` records `now` alone
+/// (last heard 0 s, silent at 2.6 s).
+#[test]
+fn a_client_arriving_after_the_peer_timeout_is_not_silent() {
+    let server = UdpServer::bind(&loopback()).unwrap();
+    let addr = server.local_addr().unwrap();
+    let t = token(0x1a7e);
+    let accept = std::thread::spawn(move || {
+        let started = Instant::now();
+        let link = server.accept(
+            &t,
+            FaultConfig::default(),
+            100.0,
+            Duration::from_secs(20),
+            0.0,
+        );
+        (link, started.elapsed().as_secs_f64())
+    });
+    std::thread::sleep(Duration::from_millis(2600));
+    let _client = connect(
+        addr,
+        &t,
+        FaultConfig::default(),
+        Duration::from_secs(5),
+        0.0,
+    )
+    .unwrap();
+    let (link, waited) = accept.join().unwrap();
+    let link = link.unwrap();
+    assert!(waited > 2.5, "the accept returned after {waited} s");
+    // The caller's clock when accept returned: 0 + the wait.
+    assert!(
+        !link.peer_silent(waited, 2.0),
+        "a client heard {waited:.2} s into the accept is taken as silent"
+    );
+}
