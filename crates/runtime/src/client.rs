@@ -155,7 +155,9 @@ pub fn run_client(
     let mut link_error = None;
     while !handle.is_finished() {
         let now = clock.now();
-        if let Some(link) = link.as_mut() {
+        if let Some(link) = link.as_mut().filter(|_| lost_at.is_none()) {
+            // Once the peer is declared lost nothing it sends is rendered:
+            // the force stays on its way to zero until the loop stops.
             let exchange = exchange(
                 link.as_mut(),
                 &mut pose_out,
@@ -183,11 +185,11 @@ pub fn run_client(
                 );
                 lost_at = Some(now);
             }
-            // Let the loop fade the stale force to zero, then stop.
-            if let Some(t) = lost_at {
-                if now - t > 0.5 {
-                    stop.store(true, Ordering::Relaxed);
-                }
+        }
+        // Let the loop fade the stale force to zero, then stop.
+        if let Some(t) = lost_at {
+            if now - t > 0.5 {
+                stop.store(true, Ordering::Relaxed);
             }
         }
         sleeper.sleep(Duration::from_micros(500));

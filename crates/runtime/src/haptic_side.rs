@@ -8,7 +8,7 @@
 use crate::live::CouplingMode;
 use crate::scenario::Scenario;
 use echothigh_haptics::{
-    handoff, FitReport, HapticRenderer, HapticsConfig, ModelManager, Sample, Vec3,
+    handoff, FitReport, ForceRamp, HapticRenderer, HapticsConfig, ModelManager, Sample, Vec3,
 };
 use echothigh_transport::SampleMsg;
 
@@ -52,7 +52,13 @@ pub struct ForceSource {
     held: triple_buffer::Output<HeldForce>,
     max_force: f64,
     stale_age: f64,
-    fade_time: f64,
+    /// The path of the `hold` and `direct` forces through zero: released
+    /// when the held force goes stale (or a fault zeroes it), engaged from
+    /// zero when a fresh one arrives, so no stall or fault kicks the device
+    /// (issue 20, item 2). The renderer has its own for `buffer`.
+    ramp: ForceRamp,
+    /// Loop time of the previous tick (s); none before the first.
+    last_time: Option<f64>,
 }
 
 /// Converts a physics sample message into the haptic crate's sample.
@@ -94,7 +100,12 @@ pub fn haptic_side(
             held: held_out,
             max_force: config.render.max_force,
             stale_age: config.render.stale_age,
-            fade_time: config.render.fade_time,
+            ramp: ForceRamp::new(
+                config.render.ramp_rate(),
+                config.render.max_tick_interval,
+                "haptics.render.fade_time",
+            )?,
+            last_time: None,
         },
     ))
 }
@@ -161,9 +172,11 @@ impl ForceSource {
     /// One haptic tick at device position `p` (m), loop time `now` (s).
     /// `buffer`: the god-object proxy on the buffer model (with friction,
     /// shading, texture and safety). `hold`: the physics' last force, held
-    /// (zero-order hold) and faded out when older than the stale age, clamped
-    /// to the maximum force, never NaN. The rate limit is not applied in
-    /// `hold`: it is the paper's baseline "without buffer model".
+    /// (zero-order hold), clamped to the maximum force, never NaN; when it is
+    /// older than the stale age it is released to zero and a fresh one
+    /// re-enters from zero, both at the ramp rate `max_force / fade_time`
+    /// (N/s). Between those, no rate limit: `hold` is the paper's baseline
+    /// "without buffer model".
     pub fn tick(&mut self, p: Vec3, now: f64) -> Rendered {
         match self.mode {
             CouplingMode::Buffer => {
@@ -179,25 +192,36 @@ impl ForceSource {
             CouplingMode::Hold | CouplingMode::Direct => {
                 let held = *self.held.read();
                 if held.count == 0 {
+                    let dt = self.advance_clock(now);
+                    let (force, _) = self.ramp.step(Vec3::zeros(), dt);
                     return Rendered {
-                        force: Vec3::zeros(),
+                        force,
                         proxy: p,
                         model_age: f64::INFINITY,
                         fault: false,
                     };
                 }
                 let age = (now - held.arrival).max(0.0);
-                self.direct(held.force, p, age)
+                self.held_force(held.force, p, age, now)
             }
         }
     }
 
-    /// Displays a force computed outside the loop (the `direct` mode's
-    /// physics force, or a held one) with the same safety: stale fade,
-    /// clamp, no NaN.
-    pub fn direct(&self, force: Vec3, p: Vec3, age: f64) -> Rendered {
-        let finite = force.iter().all(|c| c.is_finite());
-        if !finite {
+    /// Displays the `direct` mode's physics force, computed inside the tick
+    /// at loop time `now` (s): clamped, never NaN, through the ramp.
+    pub fn direct(&mut self, force: Vec3, p: Vec3, now: f64) -> Rendered {
+        self.held_force(force, p, 0.0, now)
+    }
+
+    /// A force computed outside the renderer, `age` s old, displayed with
+    /// the safety of every path: a non-finite force is a fault (zero, the
+    /// ramp released); older than the stale age it is released to zero at
+    /// the ramp rate; fresh, it re-enters from zero at that rate and is then
+    /// tracked; clamped to the maximum force.
+    fn held_force(&mut self, force: Vec3, p: Vec3, age: f64, now: f64) -> Rendered {
+        let dt = self.advance_clock(now);
+        if !force.iter().all(|c| c.is_finite()) || !age.is_finite() {
+            self.ramp.zero();
             return Rendered {
                 force: Vec3::zeros(),
                 proxy: p,
@@ -205,24 +229,47 @@ impl ForceSource {
                 fault: true,
             };
         }
-        let gain = if age <= self.stale_age {
-            1.0
-        } else if self.fade_time > 0.0 {
-            (1.0 - (age - self.stale_age) / self.fade_time).clamp(0.0, 1.0)
+        if age > self.stale_age {
+            self.ramp.release();
         } else {
-            0.0
-        };
-        let mut f = force * gain;
-        let n = f.norm();
-        if n > self.max_force {
-            f *= self.max_force / n;
+            self.ramp.engage();
         }
+        let mut target = force;
+        let n = target.norm();
+        if n > self.max_force {
+            target *= self.max_force / n;
+        }
+        let (f, _) = self.ramp.step(target, dt);
         Rendered {
             force: f,
             proxy: p,
             model_age: age,
             fault: false,
         }
+    }
+
+    /// The loop period since the previous tick (s; 0 on the first, the ramp
+    /// credits at most `max_tick_interval`).
+    fn advance_clock(&mut self, now: f64) -> f64 {
+        let dt = self.last_time.map_or(0.0, |t| now - t);
+        self.last_time = Some(now);
+        dt
+    }
+
+    /// True when the force of the last tick is exactly zero and stays zero
+    /// until fresh physics arrive (what a caller may report as "faded to
+    /// zero").
+    pub fn faded_to_zero(&self) -> bool {
+        match self.mode {
+            CouplingMode::Buffer => self.renderer.faded_to_zero(),
+            CouplingMode::Hold | CouplingMode::Direct => self.ramp.is_released(),
+        }
+    }
+
+    /// Largest change of the force in one tick while it is released or
+    /// ramped in, N: `max_force / fade_time · max_tick_interval`.
+    pub fn ramp_step_bound(&self) -> f64 {
+        self.ramp.max_step()
     }
 
     /// The buffer-model renderer (telemetry).

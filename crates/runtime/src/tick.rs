@@ -175,7 +175,7 @@ impl<D: TickDevice> HapticTick<D> {
                 physics.check()?;
                 step.t = now;
                 observer.on_physics_step(physics, &probe, &step);
-                self.source.direct(Vec3::from(sample.force), p, 0.0)
+                self.source.direct(Vec3::from(sample.force), p, now)
             }
             None => self.source.tick(p, now),
         };
