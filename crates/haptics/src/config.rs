@@ -200,7 +200,12 @@ pub struct RenderConfig {
     /// Largest rate of change of the rendered force, N/s, in [10, 1e12]: from
     /// 0.01 N per 1 ms tick up to "no limit" (1e12 N/s, far past `max_force`
     /// per tick, which tests use to isolate the other stages; a large value
-    /// allocates and loops nothing). Default 2000.
+    /// allocates and loops nothing). Default 500: 0.5 N per 1 ms tick, twice
+    /// the largest change of the undisturbed scripted exam (0.24 N per tick,
+    /// issue 20), so that no model change, friction slip or re-entry after a
+    /// stall changes the force by more than that in one tick (2 N per tick
+    /// was measured after a 0.35 s physics stall with 2000 N/s,
+    /// `crates/app/tests/stall.rs`).
     pub force_rate_limit: f64,
     /// Model age beyond which the loss is declared and the force is
     /// released to zero, s, in [0, 5]. Default 0.1.
@@ -228,7 +233,7 @@ impl Default for RenderConfig {
             texture_wavelength: 0.002,
             shading: true,
             max_force: 20.0,
-            force_rate_limit: 2000.0,
+            force_rate_limit: 500.0,
             stale_age: 0.1,
             fade_time: 0.1,
             max_tick_interval: 0.001,

@@ -44,6 +44,13 @@ pub struct ForceRamp {
     output: Vec3,
     phase: RampPhase,
     engage_pending: bool,
+    /// Least time an engagement stays rate-limited, s (see [`Self::with_settle`]).
+    settle: f64,
+    /// Time left of the current engagement's settle window, s.
+    settle_left: f64,
+    /// True once the output has tracked a target: only a re-entry (after a
+    /// release) settles, the first engagement tracks as soon as it catches up.
+    tracked: bool,
 }
 
 impl ForceRamp {
@@ -65,7 +72,28 @@ impl ForceRamp {
             output: Vec3::zeros(),
             phase: RampPhase::Released,
             engage_pending: false,
+            settle: 0.0,
+            settle_left: 0.0,
+            tracked: false,
         })
+    }
+
+    /// Keeps every re-entry (an engagement after the output has tracked a
+    /// target and been released) rate-limited for at least `settle` s (≥ 0,
+    /// finite), even once the output has caught up with the target. After a
+    /// stall the force comes back while the hand that sank is pushed out
+    /// again and the physics' models change fast between steps; tracking
+    /// them at once lets each model change or friction slip through in one
+    /// tick (up to 2 N measured after a 0.35 s stall, issue 20), where the
+    /// undisturbed exam changes the force by 0.24 N per tick at most. The
+    /// renderer uses `settle = fade_time`.
+    pub fn with_settle(mut self, settle: f64) -> Self {
+        self.settle = if settle.is_finite() {
+            settle.max(0.0)
+        } else {
+            0.0
+        };
+        self
     }
 
     /// Largest change of the output in one step, N: `rate · max_dt`.
@@ -107,7 +135,10 @@ impl ForceRamp {
     /// force is never brought back without passing through zero).
     pub fn engage(&mut self) {
         match self.phase {
-            RampPhase::Released => self.phase = RampPhase::Engaging,
+            RampPhase::Released => {
+                self.phase = RampPhase::Engaging;
+                self.settle_left = if self.tracked { self.settle } else { 0.0 };
+            }
             RampPhase::Releasing => self.engage_pending = true,
             RampPhase::Tracking | RampPhase::Engaging => {}
         }
@@ -144,6 +175,7 @@ impl ForceRamp {
                 self.output = f;
                 if f == Vec3::zeros() {
                     self.phase = if self.engage_pending {
+                        self.settle_left = if self.tracked { self.settle } else { 0.0 };
                         RampPhase::Engaging
                     } else {
                         RampPhase::Released
@@ -155,8 +187,10 @@ impl ForceRamp {
             RampPhase::Engaging => {
                 let (f, limited) = limit_rate(self.output, target, self.rate, dt);
                 self.output = f;
-                if !limited {
+                self.settle_left -= dt;
+                if !limited && self.settle_left <= 0.0 {
                     self.phase = RampPhase::Tracking;
+                    self.tracked = true;
                 }
                 (f, limited)
             }
@@ -214,6 +248,39 @@ mod tests {
         // costs one more (tiny) step.
         assert!((50..=51).contains(&steps), "{steps}");
         assert_eq!(r.step(target * 2.0, 1e-3).0, target * 2.0, "tracking");
+    }
+
+    #[test]
+    fn a_settling_engagement_stays_rate_limited_after_catching_up() {
+        // 200 N/s, 1 ms steps: 0.2 N per step; settle 50 ms.
+        let mut r = ramp().with_settle(0.05);
+        r.engage();
+        let target = Vec3::new(0.0, 1.0, 0.0);
+        // The first engagement tracks once caught up (5 steps).
+        for _ in 0..6 {
+            r.step(target, 1e-3);
+        }
+        assert_eq!(r.phase(), RampPhase::Tracking);
+        // Released, then re-engaged: the re-entry settles.
+        r.release();
+        for _ in 0..6 {
+            r.step(target, 1e-3);
+        }
+        assert!(r.is_released());
+        r.engage();
+        for _ in 0..10 {
+            r.step(target, 1e-3); // caught up after 5 steps, still settling
+        }
+        assert_eq!(r.phase(), RampPhase::Engaging);
+        // A target jump inside the window moves the output by one step.
+        let (f, limited) = r.step(target * 3.0, 1e-3);
+        assert!(limited && (f.norm() - 1.2).abs() < 1e-12, "{f:?}");
+        for _ in 0..60 {
+            r.step(target * 3.0, 1e-3);
+        }
+        // Window over and caught up: tracking, jumps pass through.
+        assert_eq!(r.phase(), RampPhase::Tracking);
+        assert_eq!(r.step(target * 5.0, 1e-3).0, target * 5.0);
     }
 
     #[test]

@@ -135,7 +135,8 @@ impl HapticRenderer {
             config.ramp_rate(),
             config.max_tick_interval,
             "haptics.render.fade_time",
-        )?;
+        )?
+        .with_settle(config.fade_time);
         Ok(HapticRenderer {
             config: config.clone(),
             friction: Friction {

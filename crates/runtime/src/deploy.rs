@@ -66,33 +66,75 @@ pub fn scripted_device(scenario: &Scenario) -> Result<SimulatedDevice> {
 
 /// Runs the scenario on the deterministic virtual clock, as fast as it
 /// can, calling `progress` with the fraction done every 0.1 s of simulated
-/// time; `stop` ends it early (between those chunks).
+/// time; `stop` ends it early (between those chunks). The trace is kept in
+/// memory and returned.
 pub fn run_virtual(
     scenario: &Scenario,
     stop: &AtomicBool,
+    progress: impl FnMut(f64),
+) -> Result<RunOutput> {
+    run_virtual_with(scenario, stop, progress, None)
+}
+
+/// [`run_virtual`], streaming the trace: every 0.1 s of simulated time the
+/// chunk's records go to `ticks` and `steps` (the recorder's rings, waiting
+/// for room: nothing is dropped), and the returned output holds no records.
+pub fn run_virtual_streamed(
+    scenario: &Scenario,
+    stop: &AtomicBool,
+    progress: impl FnMut(f64),
+    ticks: &mut RecordSink<TickRecord>,
+    steps: &mut RecordSink<PhysicsRecord>,
+) -> Result<RunOutput> {
+    run_virtual_with(scenario, stop, progress, Some((ticks, steps)))
+}
+
+type Sinks<'a> = (
+    &'a mut RecordSink<TickRecord>,
+    &'a mut RecordSink<PhysicsRecord>,
+);
+
+fn run_virtual_with(
+    scenario: &Scenario,
+    stop: &AtomicBool,
     mut progress: impl FnMut(f64),
+    mut sinks: Option<Sinks<'_>>,
 ) -> Result<RunOutput> {
     let mut run = VirtualRun::new(scenario)?;
     let d = scenario.run.duration;
     let chunk: f64 = 0.1;
     let mut t = 0.0;
     let mut end = RunEnd::Completed;
+    let mut n_steps = 0usize;
+    let mut hand_over = |run: &mut VirtualRun, n_steps: &mut usize| {
+        if let Some((ticks, steps)) = sinks.as_mut() {
+            run.drain_trace(|tr, st| {
+                tr.iter().for_each(|r| ticks.push_wait(*r));
+                st.iter().for_each(|r| steps.push_wait(*r));
+                *n_steps += st.len();
+            });
+        }
+    };
     while t < d - 1e-9 {
         if stop.load(Ordering::Relaxed) {
             end = RunEnd::Interrupted;
             break;
         }
         let step = chunk.min(d - t);
-        run.run_for(step)?;
+        let r = run.run_for(step);
+        // What was computed is kept, the chunk that failed included.
+        hand_over(&mut run, &mut n_steps);
+        r?;
         t += step;
         progress(t / d);
     }
     let (a, b) = run.link_stats();
     let faults = run.faults();
     let (ticks, steps) = run.take_trace();
+    n_steps += steps.len();
     let stats = RunStats {
         missed_deadlines: 0,
-        physics_rate: steps.len() as f64 / t.max(1e-9),
+        physics_rate: n_steps as f64 / t.max(1e-9),
         faults,
         link_dropped: a.rejected() + b.rejected(),
         dropped_records: 0,

@@ -104,7 +104,8 @@ pub fn haptic_side(
                 config.render.ramp_rate(),
                 config.render.max_tick_interval,
                 "haptics.render.fade_time",
-            )?,
+            )?
+            .with_settle(config.render.fade_time),
             last_time: None,
         },
     ))

@@ -71,6 +71,31 @@ impl<T: Copy> RecordSink<T> {
         }
     }
 
+    /// Keeps `record`, waiting for room in a full ring: for producers that
+    /// are not real-time (the virtual clock runs faster than a disk may
+    /// write, and must lose nothing). Gives up, counting the record dropped,
+    /// only when the writer has stopped (a write error, which has already
+    /// stopped the run).
+    pub fn push_wait(&mut self, record: T) {
+        let RecordSink::Ring(p, dropped) = self else {
+            return self.push(record);
+        };
+        let mut r = record;
+        loop {
+            match p.push(r) {
+                Ok(()) => return,
+                Err(rtrb::PushError::Full(back)) => {
+                    if p.is_abandoned() {
+                        *dropped += 1;
+                        return;
+                    }
+                    r = back;
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+            }
+        }
+    }
+
     /// Records dropped because the ring was full (0 for memory sinks; a full
     /// memory sink stops at its capacity, sized for the run).
     pub fn dropped(&self) -> u64 {

@@ -166,6 +166,15 @@ impl VirtualRun {
         )
     }
 
+    /// Passes the records made since the last call to `f` (ticks, steps),
+    /// then forgets them, keeping the buffers' room: how a streamed run
+    /// hands its trace to the recorder chunk by chunk.
+    pub fn drain_trace(&mut self, mut f: impl FnMut(&[TickRecord], &[PhysicsRecord])) {
+        f(&self.world.ticks, &self.world.steps);
+        self.world.ticks.clear();
+        self.world.steps.clear();
+    }
+
     /// Link statistics (haptic end, physics end).
     pub fn link_stats(&self) -> (LinkStats, LinkStats) {
         (

@@ -5,13 +5,13 @@
 
 use anyhow::{Context, Result};
 use echothigh_experiments::plot::plot_force;
-use echothigh_runtime::deploy::{run_threads, run_virtual, summarize, RunEnd, RunOutput};
+use echothigh_runtime::deploy::{run_threads, run_virtual_streamed, summarize, RunEnd, RunOutput};
 use echothigh_runtime::live::CouplingMode;
 use echothigh_runtime::recorder::{Recording, Streams};
 use echothigh_runtime::scenario::Scenario;
 use echothigh_runtime::signals::stop_on_signals;
 use echothigh_runtime::summary::Summary;
-use echothigh_runtime::trace::{write_physics, write_ticks, PhysicsRecord, TickRecord};
+use echothigh_runtime::trace::{PhysicsRecord, TickRecord};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -96,23 +96,6 @@ pub use echothigh_runtime::summary::default_out;
 pub fn expected_rows(scenario: &Scenario) -> u64 {
     let c = &scenario.coupling;
     (scenario.run.duration * (c.haptic_rate + c.physics_rate)).ceil() as u64
-}
-
-/// Writes a whole run's files into `dir` (the virtual clock's runs, kept in
-/// memory; the real-time runs stream theirs through a [`Recording`]).
-pub fn write_run(dir: &Path, scenario: &Scenario, out: &RunOutput, deployment: &str) -> Result<()> {
-    if dir.join("summary.json").exists() || dir.join("haptic.csv").exists() {
-        anyhow::bail!(
-            "{} already holds a run: choose another --out (nothing was overwritten)",
-            dir.display()
-        );
-    }
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    write_scenario(dir, scenario)?;
-    let mode = mode_name(scenario);
-    write_ticks(&dir.join("haptic.csv"), &mode, &out.ticks)?;
-    write_physics(&dir.join("physics.csv"), &out.steps)?;
-    finish_run(dir, scenario, deployment, &out.ticks, &out.steps, out)
 }
 
 /// The coupling mode's name as the files write it.
@@ -204,16 +187,37 @@ pub fn run(args: Args) -> Result<()> {
     bar.set_message(format!("{:?} coupling, {d:.1} s exam", scenario.coupling.mode).to_lowercase());
     match args.deployment {
         Deployment::Virtual => {
-            // Check the directory before the run, write after it.
-            if dir.join("summary.json").exists() || dir.join("haptic.csv").exists() {
-                anyhow::bail!(
-                    "{} already holds a run: choose another --out (nothing was overwritten)",
-                    dir.display()
-                );
-            }
-            let out = run_virtual(&scenario, &stop, |f| bar.set_position((f * 1000.0) as u64))?;
+            // Streamed like the real-time runs: the directory checked and
+            // the files opened before the run, each 0.1 s of simulated time
+            // written as it is made.
+            let (recording, mut ticks, mut steps) = Recording::create(
+                &dir,
+                &mode_name(&scenario),
+                Streams::BOTH,
+                expected_rows(&scenario),
+                stop.clone(),
+            )?;
+            write_scenario(&dir, &scenario)?;
+            let out = run_virtual_streamed(
+                &scenario,
+                &stop,
+                |f| bar.set_position((f * 1000.0) as u64),
+                &mut ticks,
+                &mut steps,
+            );
             bar.finish_and_clear();
-            write_run(&dir, &scenario, &out, "virtual")
+            drop((ticks, steps));
+            let recorded = recording.finish();
+            let out = out?;
+            let recorded = recorded?;
+            finish_run(
+                &dir,
+                &scenario,
+                "virtual",
+                &recorded.ticks,
+                &recorded.steps,
+                &out,
+            )
         }
         Deployment::Threads => {
             let (recording, ticks, steps) = Recording::create(
