@@ -107,7 +107,23 @@ fn rows(csv: &Path) -> Vec<Row> {
         .collect()
 }
 
-/// One run: stops `side` for `stall` s, 3 s after the client starts.
+/// Loop time of the last complete row of a streamed trace (s; 0 if none).
+fn last_time(csv: &Path) -> f64 {
+    let text = std::fs::read_to_string(csv).unwrap_or_default();
+    let whole = &text[..text.rfind('\n').unwrap_or(0)];
+    whole
+        .lines()
+        .last()
+        .and_then(|l| l.split(',').next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or(0.0)
+}
+
+/// Loop time (s) the stall starts at: sliding in contact.
+const STALL_AT: f64 = 2.5;
+
+/// One run: stops `side` for `stall` s once the client's loop is past
+/// [`STALL_AT`].
 fn run(side: Side, stall: f64, work: &Path) -> Vec<Row> {
     let scenario = work.join("scenario.toml");
     std::fs::write(&scenario, "[coupling]\npeer_timeout = 5.0\n").unwrap();
@@ -143,7 +159,18 @@ fn run(side: Side, stall: f64, work: &Path) -> Vec<Row> {
         .spawn()
         .unwrap();
     let mut guard = Guard(vec![server, client]);
-    std::thread::sleep(Duration::from_secs(3));
+    // Stop once the client's loop is 2.5 s into the exam (sliding in
+    // contact, 2.0–4.05 s of the default script), read from its streamed
+    // trace (flushed every 0.25 s), whatever the start-up took.
+    let csv = out.join("haptic.csv");
+    let t0 = std::time::Instant::now();
+    while last_time(&csv) < STALL_AT {
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "the client never got to {STALL_AT} s"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
     let victim = guard.0[if side == Side::Server { 0 } else { 1 }].id();
     kill(victim, "-STOP");
     std::thread::sleep(Duration::from_secs_f64(stall));
@@ -156,16 +183,22 @@ fn run(side: Side, stall: f64, work: &Path) -> Vec<Row> {
 }
 
 /// Index of the first tick after the stall: the largest gap between ticks
-/// (the client stopped) or the oldest model (the server stopped).
-fn stall_end(rows: &[Row], side: Side) -> usize {
+/// (the client stopped) or the oldest model (the server stopped), looked
+/// for where the stall can be: from [`STALL_AT`] to 1.5 s past it (the
+/// flush period, the polling and a loaded machine's scheduling delays),
+/// plus the stall.
+fn stall_end(rows: &[Row], side: Side, stall: f64) -> usize {
+    let near = |i: &usize| (STALL_AT..STALL_AT + 1.5 + stall).contains(&rows[*i].t);
     match side {
         Side::Client => (1..rows.len())
+            .filter(near)
             .max_by(|&a, &b| {
                 let g = |i: usize| rows[i].t - rows[i - 1].t;
                 g(a).total_cmp(&g(b))
             })
             .unwrap(),
         Side::Server => (0..rows.len())
+            .filter(near)
             .max_by(|&a, &b| rows[a].model_age.total_cmp(&rows[b].model_age))
             .unwrap(),
     }
@@ -173,37 +206,8 @@ fn stall_end(rows: &[Row], side: Side) -> usize {
 
 fn check(side: Side, stall: f64, rows: &[Row]) {
     let what = format!("{side:?} stopped {stall} s");
-    let end = stall_end(rows, side);
-    // The stall began `stall` s of loop time before its end (server) or at
-    // the tick before the gap (client); look from 0.3 s before it to 1.5 s
-    // after its end.
-    let t_end = rows[end].t;
-    let t_start = match side {
-        Side::Client => rows[end - 1].t,
-        Side::Server => t_end - rows[end].model_age,
-    };
-    assert!(
-        rows[end].t - t_start > 0.8 * stall.min(1.0) - 0.01,
-        "{what}: the stall is not visible in the trace (found {:.3} s)",
-        t_end - t_start
-    );
-    let before: Vec<&Row> = rows
-        .iter()
-        .filter(|r| r.t >= t_start - 0.3 && r.t < t_start)
-        .collect();
-    assert!(
-        before.iter().all(|r| r.force > 5.0),
-        "{what}: not in contact before the stall"
-    );
-    let f0 = before.iter().map(|r| r.force).fold(0.0, f64::max);
-    let last = before.last().unwrap();
-    let k = last.force / (last.proxy_y - last.device_y).abs();
-    let window: Vec<&Row> = rows
-        .iter()
-        .filter(|r| r.t >= t_start - 0.3 && r.t <= t_end + 1.5)
-        .collect();
-    let mut deepest = last.device_y;
-    for w in window.windows(2) {
+    // No kick anywhere in the run.
+    for w in rows.windows(2) {
         let d = (w[1].force - w[0].force).abs();
         assert!(
             d <= TICK_BOUND,
@@ -212,16 +216,51 @@ fn check(side: Side, stall: f64, rows: &[Row]) {
             w[0].force,
             w[1].force
         );
-        deepest = deepest.min(w[1].device_y);
+    }
+    // A server stall shorter than the stale age (0.1 s) leaves the model in
+    // use: nothing is released, the hand does not sink, and the stall is
+    // not told apart from the link's jitter in the trace; the bound above
+    // is the whole promise there.
+    if side == Side::Server && stall < 0.1 {
+        return;
+    }
+    let end = stall_end(rows, side, stall);
+    let t_end = rows[end].t;
+    let t_start = match side {
+        Side::Client => rows[end - 1].t,
+        Side::Server => t_end - rows[end].model_age,
+    };
+    assert!(
+        t_end - t_start > 0.8 * stall.min(1.0) - 0.01,
+        "{what}: the stall is not visible in the trace (found {:.3} s)",
+        t_end - t_start
+    );
+    // The reference: the force and the buffer model's stiffness in the
+    // second before the stall (on a loaded machine the physics may already
+    // have been late then, so the last tick well in contact is taken).
+    let before: Vec<&Row> = rows
+        .iter()
+        .filter(|r| r.t >= t_start - 1.0 && r.t < t_start)
+        .collect();
+    let f0 = before.iter().map(|r| r.force).fold(0.0, f64::max);
+    let last = before
+        .iter()
+        .rev()
+        .find(|r| r.force > 5.0)
+        .unwrap_or_else(|| panic!("{what}: not in contact in the second before {t_start:.3} s"));
+    let k = last.force / (last.proxy_y - last.device_y).abs();
+    let mut deepest = last.device_y;
+    for r in rows.iter().filter(|r| r.t >= t_start && r.t <= t_end + 1.5) {
         // The thigh's surface is below the probe: deeper is lower y.
+        deepest = deepest.min(r.device_y);
         let sink = (last.device_y - deepest).max(0.0);
         let margin = 2.0 * k * sink + TICK_BOUND;
         assert!(
-            w[1].force <= f0 + margin,
+            r.force <= f0 + margin,
             "{what}: {:.2} N at t = {:.3} s exceeds {f0:.2} N before the stall \
              + {margin:.2} N (sank {:.1} mm, k {k:.0} N/m)",
-            w[1].force,
-            w[1].t,
+            r.force,
+            r.t,
             sink * 1e3
         );
     }

@@ -65,6 +65,44 @@ pub trait HapticDevice {
     }
 }
 
+/// A boxed device is a device (the runtime drives `Box<dyn HapticDevice +
+/// Send>` when the backend is chosen at run time: `--device NAME`).
+impl<T: HapticDevice + ?Sized> HapticDevice for Box<T> {
+    fn position(&self) -> Vec3 {
+        (**self).position()
+    }
+    fn velocity(&self) -> Vec3 {
+        (**self).velocity()
+    }
+    fn set_force(&mut self, force: Vec3) {
+        (**self).set_force(force)
+    }
+    fn force(&self) -> Vec3 {
+        (**self).force()
+    }
+    fn max_force(&self) -> f64 {
+        (**self).max_force()
+    }
+    fn max_stiffness(&self) -> f64 {
+        (**self).max_stiffness()
+    }
+    fn sampling_rate(&self) -> f64 {
+        (**self).sampling_rate()
+    }
+    fn advance(&mut self, dt: f64) {
+        (**self).advance(dt)
+    }
+    fn faults(&self) -> DeviceFaults {
+        (**self).faults()
+    }
+    fn orientation(&self) -> Option<nalgebra::UnitQuaternion<f64>> {
+        (**self).orientation()
+    }
+    fn clutched(&self) -> bool {
+        (**self).clutched()
+    }
+}
+
 /// Limits a commanded force to `max_force` (N) and rejects non-finite input,
 /// updating `faults`. Returns the force to render (N).
 pub fn limit_force(force: Vec3, max_force: f64, faults: &mut DeviceFaults) -> Vec3 {

@@ -10,7 +10,7 @@ use super::haptic_side::{ForceSource, SampleSink};
 use super::physics_loop::Clock;
 use super::physics_side::PhysicsSide;
 use super::recorder::RecordSink;
-use super::tick::{HandoffObserver, HapticTick, TickCounters};
+use super::tick::{HandoffObserver, HapticTick, TickCounters, TickDevice};
 use super::trace::TickRecord;
 use anyhow::{Context, Result};
 use echothigh_device::{ForceScale, SimulatedDevice};
@@ -58,9 +58,9 @@ pub struct ClientReport {
 }
 
 /// Everything the haptic loop owns.
-pub struct LoopParts {
-    /// The device (simulated, with its hand).
-    pub device: SimulatedDevice,
+pub struct LoopParts<D = SimulatedDevice> {
+    /// The device: simulated with its hand, or a real one (`--device`).
+    pub device: D,
     /// The force source of the coupling mode.
     pub source: ForceSource,
     /// Tissue → device force scale.
@@ -95,10 +95,10 @@ pub struct ClientConfig<'a> {
 /// runs inside the loop). Every tick's record goes to `ticks`. Both threads
 /// are joined on every path; an error of either is returned after both
 /// have stopped, the device's force set to zero.
-pub fn run_client(
+pub fn run_client<D: TickDevice + Send + 'static>(
     mut link: Option<Box<dyn Link>>,
     mut sink: SampleSink,
-    parts: LoopParts,
+    parts: LoopParts<D>,
     config: ClientConfig<'_>,
     ticks: RecordSink<TickRecord>,
 ) -> Result<ClientReport> {

@@ -8,6 +8,7 @@ use super::physics_loop::{physics_loop, Clock, PhysicsReport};
 use super::physics_side::PhysicsSide;
 use super::recorder::RecordSink;
 use super::summary::{median, Summary};
+use super::tick::TickDevice;
 use super::trace::{force_magnitudes, PhysicsRecord, TickRecord};
 use super::virtual_clock::VirtualRun;
 use crate::live::CouplingMode;
@@ -155,10 +156,22 @@ pub fn run_threads(
     scenario: &Scenario,
     stop: Arc<AtomicBool>,
     ticks: RecordSink<TickRecord>,
+    steps: RecordSink<PhysicsRecord>,
+) -> Result<RunOutput> {
+    let device = scripted_device(scenario)?;
+    run_threads_on(scenario, stop, ticks, steps, device)
+}
+
+/// [`run_threads`] on a given device: a real one (`--device NAME`, a
+/// person's hand instead of the scenario's exam script) or a simulated one.
+pub fn run_threads_on<D: TickDevice + Send + 'static>(
+    scenario: &Scenario,
+    stop: Arc<AtomicBool>,
+    ticks: RecordSink<TickRecord>,
     mut steps: RecordSink<PhysicsRecord>,
+    device: D,
 ) -> Result<RunOutput> {
     let c = &scenario.coupling;
-    let device = scripted_device(scenario)?;
     let (sink, source) = haptic_side_for(c.mode, scenario)?;
     let scale = scenario.device.force_scale();
     let config = ClientConfig {

@@ -49,6 +49,9 @@ impl TickDevice for SimulatedDevice {
     }
 }
 
+/// A device chosen at run time (`--device NAME`): a real one has no script.
+impl TickDevice for Box<dyn HapticDevice + Send> {}
+
 /// Sees each tick. Every method runs inside the real-time tick: it must not
 /// allocate, lock a contended mutex, do I/O or wait.
 pub trait TickObserver {
@@ -165,7 +168,13 @@ impl<D: TickDevice> HapticTick<D> {
     pub fn tick(&mut self, now: f64, observer: &mut impl TickObserver) -> anyhow::Result<Rendered> {
         // 1. Read the device.
         let p = self.device.position();
-        let probe = ProbeMsg::new(now, p.into(), self.orientation, 0);
+        // A device that senses the tool's orientation sets the probe's
+        // (its rotation about the leg and its tilt); else the front end's.
+        let orientation = self
+            .device
+            .orientation()
+            .map_or(self.orientation, |q| [q.w, q.i, q.j, q.k]);
+        let probe = ProbeMsg::new(now, p.into(), orientation, 0);
         observer.on_probe(&probe)?;
         // 2. Compute the force.
         let rendered = match self.direct.as_mut() {

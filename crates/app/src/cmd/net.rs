@@ -14,7 +14,9 @@ use echothigh_runtime::physics_loop::{physics_loop, Clock, PhysicsEnd};
 use echothigh_runtime::physics_side::PhysicsSide;
 use echothigh_runtime::recorder::{RecordSink, Recording, Streams};
 use echothigh_runtime::signals::stop_on_signals;
-use echothigh_transport::{connect, LinkError, ListenConfig, SessionToken, TokenSource, UdpServer};
+use echothigh_transport::{
+    connect, Link, LinkError, ListenConfig, SessionToken, TokenSource, UdpServer,
+};
 use std::io::Write;
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -86,6 +88,9 @@ pub struct ClientArgs {
     /// Handshake timeout (s): a number >= 0, or `inf` to wait forever.
     #[arg(long, default_value_t = 5.0, value_parser = parse_wait)]
     pub connect_timeout: f64,
+    /// The device the haptic loop drives.
+    #[command(flatten)]
+    pub device: super::device_arg::DeviceArgs,
 }
 
 /// Runs the physics server: serves one haptic client after another (a new
@@ -257,6 +262,8 @@ pub fn client(args: ClientArgs) -> Result<()> {
         bail!("no session token: pass --token (printed by the server) or set ECHOTHIGH_TOKEN");
     };
     let connect_timeout = timeout_arg("--connect-timeout", args.connect_timeout)?;
+    // The device first: a missing driver is said before any file is made.
+    let real = args.device.open()?;
     let dir = args.out.clone().unwrap_or_else(|| default_out("client"));
     let stop = stop_on_signals()?;
     // The directory, its free space and its files before connecting.
@@ -292,21 +299,35 @@ pub fn client(args: ClientArgs) -> Result<()> {
         args.connect,
         welcome.physics_rate
     );
-    let device = scripted_device(&scenario)?;
     let (sink, source) = haptic_side_for(c.mode, &scenario)?;
-    let parts = LoopParts {
-        device,
-        source,
-        scale: scenario.device.force_scale(),
-        direct_physics: None,
-    };
+    let scale = scenario.device.force_scale();
     let config = ClientConfig {
         loop_config: &scenario.haptics.runner,
         duration: scenario.run.duration,
         peer_timeout: c.peer_timeout,
         stop,
     };
-    let report = run_client(Some(Box::new(link)), sink, parts, config, ticks);
+    let link: Box<dyn Link> = Box::new(link);
+    let report = match real {
+        Some(device) => {
+            let parts = LoopParts {
+                device,
+                source,
+                scale,
+                direct_physics: None,
+            };
+            run_client(Some(link), sink, parts, config, ticks)
+        }
+        None => {
+            let parts = LoopParts {
+                device: scripted_device(&scenario)?,
+                source,
+                scale,
+                direct_physics: None,
+            };
+            run_client(Some(link), sink, parts, config, ticks)
+        }
+    };
     let recorded = recording.finish();
     let report = report?;
     let recorded = recorded?;

@@ -3,9 +3,12 @@
 //! `haptic.csv` (1 kHz trace), `physics.csv` (physics trace), `summary.json`,
 //! `force.png` and the effective `scenario.toml`.
 
+use super::device_arg::DeviceArg;
 use anyhow::{Context, Result};
 use echothigh_experiments::plot::plot_force;
-use echothigh_runtime::deploy::{run_threads, run_virtual_streamed, summarize, RunEnd, RunOutput};
+use echothigh_runtime::deploy::{
+    run_threads, run_threads_on, run_virtual_streamed, summarize, RunEnd, RunOutput,
+};
 use echothigh_runtime::live::CouplingMode;
 use echothigh_runtime::recorder::{Recording, Streams};
 use echothigh_runtime::scenario::Scenario;
@@ -49,6 +52,9 @@ pub struct Args {
     /// Override the run duration (s).
     #[arg(long)]
     pub duration: Option<f64>,
+    /// The device the haptic loop drives.
+    #[command(flatten)]
+    pub device: super::device_arg::DeviceArgs,
 }
 
 /// Coupling mode on the command line.
@@ -175,6 +181,14 @@ fn verdict(dir: &Path, s: &Summary) -> Result<()> {
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     let scenario = load_scenario(args.scenario.as_deref(), args.mode, args.duration)?;
+    if args.deployment == Deployment::Virtual && args.device.device != DeviceArg::Simulated {
+        anyhow::bail!(
+            "--device {:?} needs a real-time run: drop --deployment virtual",
+            args.device.device
+        );
+    }
+    // The device first: a missing driver is said before any file is made.
+    let device = args.device.open()?;
     let dir = args.out.clone().unwrap_or_else(|| default_out("run"));
     let stop = stop_on_signals()?;
     let d = scenario.run.duration;
@@ -237,7 +251,10 @@ pub fn run(args: Args) -> Result<()> {
                     std::thread::sleep(Duration::from_millis(100));
                 }
             });
-            let out = run_threads(&scenario, stop, ticks, steps);
+            let out = match device {
+                Some(d) => run_threads_on(&scenario, stop, ticks, steps, d),
+                None => run_threads(&scenario, stop, ticks, steps),
+            };
             done.store(true, Ordering::Relaxed);
             let _ = ticker.join();
             bar.finish_and_clear();
