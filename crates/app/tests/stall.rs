@@ -23,8 +23,10 @@
 //!   stiffness gives for the extra depth the hand sank while the force was
 //!   released, `k · Δd`, plus one 0.5 N tick. `k` is the pre-stall
 //!   stiffness `F / |proxy − device|` times 2: the model grows stiffer with
-//!   depth, and the local stiffness of the default thigh doubles between
-//!   10 and 20 mm of indentation (the Fig. 4 curve, docs/fig4).
+//!   depth (in the default press of `echothigh run`, from 700 N/m at 3 N
+//!   to 1 150 N/m at 9 N, ×1.6 over 8 mm of indentation), and the hand
+//!   sinks by up to ~7 mm after a stall (measured: 58.5 → 51.5 mm after a
+//!   0.35 s client stop).
 
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -36,6 +38,9 @@ const TOKEN: &str = "00000000000000cd";
 const STALLS: [f64; 5] = [0.05, 0.15, 0.35, 1.0, 3.0];
 /// Largest force change in one tick (N), see the module docs.
 const TICK_BOUND: f64 = 0.5;
+/// `haptic.csv` writes forces to 1e-5 N: a difference of two printed
+/// values is off by at most 1e-5 N.
+const CSV_PRECISION: f64 = 1e-5;
 
 struct Guard(Vec<Child>);
 
@@ -210,7 +215,7 @@ fn check(side: Side, stall: f64, rows: &[Row]) {
     for w in rows.windows(2) {
         let d = (w[1].force - w[0].force).abs();
         assert!(
-            d <= TICK_BOUND,
+            d <= TICK_BOUND + CSV_PRECISION,
             "{what}: the force changed by {d:.3} N in one tick at t = {:.3} s ({:.2} -> {:.2} N)",
             w[1].t,
             w[0].force,
@@ -254,7 +259,7 @@ fn check(side: Side, stall: f64, rows: &[Row]) {
         // The thigh's surface is below the probe: deeper is lower y.
         deepest = deepest.min(r.device_y);
         let sink = (last.device_y - deepest).max(0.0);
-        let margin = 2.0 * k * sink + TICK_BOUND;
+        let margin = 2.0 * k * sink + TICK_BOUND + CSV_PRECISION;
         assert!(
             r.force <= f0 + margin,
             "{what}: {:.2} N at t = {:.3} s exceeds {f0:.2} N before the stall \
