@@ -146,3 +146,37 @@ fn an_emulated_device_pressed_into_the_thigh_is_pushed_out() {
         std::fs::remove_dir_all(&out).ok();
     }
 }
+
+/// `devices calibrate` with nobody touching the emulated stylus: the
+/// landmark waited for is named, and no file is written (the capture
+/// itself is tested in-process against the emulator, where the test can
+/// move the stylus: `crates/devices-hw/tests/calibrate.rs`).
+#[test]
+fn calibrate_without_a_touch_names_the_landmark_and_writes_nothing() {
+    let out = out_dir("calibrate").with_extension("toml");
+    let o = Command::new(BIN)
+        .args([
+            "devices",
+            "calibrate",
+            "--device",
+            "openhaptics",
+            "--timeout",
+            "0.5",
+            "--out",
+        ])
+        .arg(&out)
+        .env("ECHOTHIGH_HD_LIB", emulator())
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "exit 0: {err}");
+    assert!(
+        err.contains("(1/4) touch the top of the thigh at mid-thigh"),
+        "{err}"
+    );
+    assert!(
+        err.contains("no touch of \"the top of the thigh at mid-thigh\""),
+        "{err}"
+    );
+    assert!(!out.exists(), "a file was written");
+}

@@ -32,6 +32,7 @@ pub mod config;
 mod error;
 pub mod forcedimension;
 mod hardware;
+pub mod landmarks;
 pub mod library;
 pub mod openhaptics;
 pub mod probe;
@@ -44,6 +45,7 @@ pub use config::{
 };
 pub use error::DeviceError;
 pub use hardware::{Backend, DeviceInfo, HardwareDevice};
+pub use landmarks::{capture_landmarks, CaptureConfig, CaptureError, CaptureEvent, Landmark};
 pub use probe::{probe, probe_all, BackendReport};
 
 use echothigh_device::HapticDevice;

@@ -2,6 +2,11 @@
 //! SDK library was found (which file, which environment variable overrides
 //! it), the devices connected with model, workspace and limits, and why a
 //! backend cannot start. Exits 0 whether or not a device is present.
+//!
+//! `echothigh devices calibrate --device NAME --out FILE`: the trainee
+//! touches four landmarks of the thigh with the probe, pressing the clutch
+//! button on each; the fitted device → leg placement is written as a
+//! `--hardware` file.
 
 use anyhow::{Context, Result};
 use echothigh_devices_hw::{probe_all, BackendReport, HardwareConfig};
@@ -12,10 +17,24 @@ pub struct Args {
     /// Print the report as JSON (one array, one object per backend).
     #[arg(long)]
     json: bool,
+    /// Calibrate a device instead of listing them.
+    #[command(subcommand)]
+    action: Option<Action>,
+}
+
+/// What `devices` does besides listing.
+#[derive(clap::Subcommand, Debug)]
+pub enum Action {
+    /// Touch four landmarks of the thigh with the probe (clutch button on
+    /// each, held still 0.3 s) and write the device's placement.
+    Calibrate(super::calibrate_device::Args),
 }
 
 /// Probes every backend and prints the report.
 pub fn run(args: Args) -> Result<()> {
+    if let Some(Action::Calibrate(a)) = args.action {
+        return super::calibrate_device::run(a);
+    }
     let reports = probe_all(&HardwareConfig::default());
     if args.json {
         println!(
