@@ -271,6 +271,14 @@ impl ExamScript {
     ///
     /// The press ends when `input.felt_tissue_force ≥ target_force` or the
     /// probe's depth `(input.position − skin_point)·d̂ ≥ max_depth`.
+    ///
+    /// Bounded: one advance ends at most `phases.len()` phases (one pass of
+    /// the list). Phases can take no time (a slide of 0 m, an approach to
+    /// where the setpoint is, a press already at its force), so without the
+    /// bound a script of instant phases would run all its `repeat ×
+    /// phases` (up to 10⁶) transitions inside one 1 ms tick. A step that
+    /// would complete more than a pass leaves the rest of its time unused
+    /// (the script then lags the clock by it).
     pub fn advance(&mut self, dt: f64, input: ExamInput) -> Vec3 {
         if !(dt.is_finite() && dt > 0.0) {
             return self.setpoint;
@@ -278,6 +286,7 @@ impl ExamScript {
         let before = self.setpoint;
         self.time += dt;
         let mut remaining = dt;
+        let mut transitions = 0;
         while let Some(&phase) = self.phases.get(self.index) {
             if !self.entered {
                 self.entered = true;
@@ -341,7 +350,8 @@ impl ExamScript {
                 break;
             }
             self.next_phase();
-            if remaining <= 0.0 {
+            transitions += 1;
+            if remaining <= 0.0 || transitions >= self.phases.len() {
                 break;
             }
         }
