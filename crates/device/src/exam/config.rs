@@ -43,6 +43,7 @@
 //! the thigh axis on a generalized cylinder keeps the skin height). Depth
 //! below the skin of a point `x` is `(x − skin_point) · d̂`.
 
+use super::ExamPhase;
 use crate::error::ConfigError;
 use serde::{Deserialize, Serialize};
 
@@ -99,6 +100,19 @@ pub enum PhaseConfig {
         /// in [0, 0.1].
         clearance: f64,
     },
+}
+
+impl PhaseConfig {
+    /// Which kind of phase this is (the script's [`ExamPhase`] while it runs).
+    pub fn kind(&self) -> ExamPhase {
+        match self {
+            PhaseConfig::Approach { .. } => ExamPhase::Approach,
+            PhaseConfig::Press { .. } => ExamPhase::Press,
+            PhaseConfig::Hold { .. } => ExamPhase::Hold,
+            PhaseConfig::Slide { .. } => ExamPhase::Slide,
+            PhaseConfig::Release { .. } => ExamPhase::Release,
+        }
+    }
 }
 
 /// The exam script (`[exam]`): a start setpoint, the skin's local geometry,

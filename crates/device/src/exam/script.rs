@@ -67,37 +67,14 @@ pub struct ExamInput {
     pub felt_tissue_force: f64,
 }
 
-#[derive(Debug, Clone, Copy)]
-enum Phase {
-    Approach {
-        point: Vec3,
-        speed: f64,
-    },
-    Press {
-        rate: f64,
-        target_force: f64,
-        max_depth: f64,
-    },
-    Hold {
-        duration: f64,
-    },
-    Slide {
-        direction: Vec3,
-        distance: f64,
-        speed: f64,
-    },
-    Release {
-        speed: f64,
-        clearance: f64,
-    },
-}
-
 /// The running exam script: the hand's setpoint as a function of time and of
 /// what the hand feels.
 #[derive(Debug, Clone)]
 pub struct ExamScript {
     config: ExamConfig,
-    phases: Vec<Phase>,
+    /// The configured phases, slide directions already made unit and
+    /// perpendicular to the press direction.
+    phases: Vec<PhaseConfig>,
     skin_point: Vec3,
     press_direction: Vec3,
     setpoint: Vec3,
@@ -135,33 +112,20 @@ impl ExamScript {
             .phases
             .iter()
             .map(|p| match *p {
-                PhaseConfig::Approach { point, speed } => Phase::Approach {
-                    point: v3(point),
-                    speed,
-                },
-                PhaseConfig::Press {
-                    rate,
-                    target_force,
-                    max_depth,
-                } => Phase::Press {
-                    rate,
-                    target_force,
-                    max_depth,
-                },
-                PhaseConfig::Hold { duration } => Phase::Hold { duration },
                 PhaseConfig::Slide {
                     direction,
                     distance,
                     speed,
                 } => {
                     let u = v3(direction);
-                    Phase::Slide {
-                        direction: (u - d * u.dot(&d)).normalize(),
+                    let along = (u - d * u.dot(&d)).normalize();
+                    PhaseConfig::Slide {
+                        direction: [along.x, along.y, along.z],
                         distance,
                         speed,
                     }
                 }
-                PhaseConfig::Release { speed, clearance } => Phase::Release { speed, clearance },
+                other => other,
             })
             .collect();
         let start = v3(config.start);
@@ -225,14 +189,10 @@ impl ExamScript {
 
     /// Where the script is.
     pub fn status(&self) -> ExamStatus {
-        let phase = match self.phases.get(self.index) {
-            None => ExamPhase::Done,
-            Some(Phase::Approach { .. }) => ExamPhase::Approach,
-            Some(Phase::Press { .. }) => ExamPhase::Press,
-            Some(Phase::Hold { .. }) => ExamPhase::Hold,
-            Some(Phase::Slide { .. }) => ExamPhase::Slide,
-            Some(Phase::Release { .. }) => ExamPhase::Release,
-        };
+        let phase = self
+            .phases
+            .get(self.index)
+            .map_or(ExamPhase::Done, PhaseConfig::kind);
         ExamStatus {
             phase,
             phase_index: self.index,
@@ -290,22 +250,22 @@ impl ExamScript {
         while let Some(&phase) = self.phases.get(self.index) {
             if !self.entered {
                 self.entered = true;
-                if let Phase::Slide {
+                if let PhaseConfig::Slide {
                     direction,
                     distance,
                     ..
                 } = phase
                 {
-                    self.slide_target = self.setpoint + direction * distance;
+                    self.slide_target = self.setpoint + v3(direction) * distance;
                 }
             }
             let (used, complete) = match phase {
-                Phase::Approach { point, speed } => {
-                    let (p, used, done) = move_toward(self.setpoint, point, speed, remaining);
+                PhaseConfig::Approach { point, speed } => {
+                    let (p, used, done) = move_toward(self.setpoint, v3(point), speed, remaining);
                     self.setpoint = p;
                     (used, done)
                 }
-                Phase::Press {
+                PhaseConfig::Press {
                     rate,
                     target_force,
                     max_depth,
@@ -319,7 +279,7 @@ impl ExamScript {
                         (remaining, false)
                     }
                 }
-                Phase::Hold { duration } => {
+                PhaseConfig::Hold { duration } => {
                     let left = (duration - self.phase_time).max(0.0);
                     if left <= remaining {
                         (left, true)
@@ -327,13 +287,13 @@ impl ExamScript {
                         (remaining, false)
                     }
                 }
-                Phase::Slide { speed, .. } => {
+                PhaseConfig::Slide { speed, .. } => {
                     let (p, used, done) =
                         move_toward(self.setpoint, self.slide_target, speed, remaining);
                     self.setpoint = p;
                     (used, done)
                 }
-                Phase::Release { speed, clearance } => {
+                PhaseConfig::Release { speed, clearance } => {
                     let to_go = self.depth(self.setpoint) + clearance;
                     if to_go <= speed * remaining {
                         self.setpoint -= self.press_direction * to_go.max(0.0);
