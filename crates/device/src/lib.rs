@@ -42,9 +42,7 @@ mod simulated;
 pub use config::{DeviceConfig, HandConfig};
 pub use device::{limit_force, DeviceFaults, ForceScale, HapticDevice};
 pub use error::{ConfigError, ReplayError};
-pub use exam::{
-    ExamConfig, ExamInput, ExamPhase, ExamScript, ExamStatus, PhaseConfig, MAX_PHASES,
-};
+pub use exam::{ExamConfig, ExamInput, ExamPhase, ExamScript, ExamStatus, PhaseConfig, MAX_PHASES};
 pub use hand::SimulatedHand;
 pub use replay::ReplayDevice;
 pub use simulated::SimulatedDevice;

@@ -248,7 +248,10 @@ fn instant_phases_run_one_pass_per_advance() {
     };
     script.advance(1e-3, input);
     let s = script.status();
-    assert_eq!((s.phase, s.phase_index, s.repetition), (ExamPhase::Slide, 0, 1));
+    assert_eq!(
+        (s.phase, s.phase_index, s.repetition),
+        (ExamPhase::Slide, 0, 1)
+    );
     for _ in 1..999 {
         script.advance(1e-3, input);
     }
