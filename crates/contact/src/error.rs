@@ -71,6 +71,14 @@ pub enum CsvError {
     /// The file could not be read at all.
     #[error("cannot read calibration data: {0}")]
     Io(String),
+    /// Malformed CSV (invalid UTF-8, an unterminated quote, ...).
+    #[error("line {line}: malformed CSV: {message}")]
+    Malformed {
+        /// Line number (1-based).
+        line: u64,
+        /// The CSV reader's message.
+        message: String,
+    },
     /// A required column is absent from the header line.
     #[error("line {line}: missing column `{column}` (header has: {found})")]
     MissingColumn {
@@ -129,4 +137,38 @@ pub enum CsvError {
         /// Rows required.
         required: usize,
     },
+}
+
+impl From<echothigh_table::TableError> for CsvError {
+    fn from(e: echothigh_table::TableError) -> Self {
+        use echothigh_table::TableError as T;
+        match e {
+            T::Io(message) => CsvError::Io(message),
+            e @ T::TooLarge { .. } => CsvError::Io(e.to_string()),
+            T::NoHeader => CsvError::TooFewRows {
+                found: 0,
+                required: crate::calibration::data::MIN_ROWS,
+            },
+            T::Syntax { line, message } => CsvError::Malformed { line, message },
+            T::MissingColumn {
+                line,
+                column,
+                found,
+            } => CsvError::MissingColumn {
+                line,
+                column,
+                found,
+            },
+            T::ShortRow {
+                line,
+                expected,
+                found,
+            } => CsvError::ShortRow {
+                line,
+                expected,
+                found,
+            },
+            T::NotANumber { line, column, text } => CsvError::NotANumber { line, column, text },
+        }
+    }
 }
