@@ -19,15 +19,6 @@ pub enum ConfigError {
         /// What the value must satisfy.
         reason: &'static str,
     },
-    /// The TOML text does not parse (unknown key, missing field, wrong type);
-    /// the message comes from the TOML decoder and names the key and line.
-    #[error("cannot parse `[{section}]`: {message}")]
-    Parse {
-        /// The section being decoded, e.g. `exam`.
-        section: &'static str,
-        /// The decoder's message.
-        message: String,
-    },
 }
 
 impl ConfigError {

@@ -145,12 +145,6 @@ impl ExamScript {
         })
     }
 
-    /// Parses `[exam]` from a scenario TOML document and builds the script
-    /// (see [`ExamConfig::from_toml_str`]).
-    pub fn from_toml_str(text: &str) -> Result<Self, ConfigError> {
-        Self::new(ExamConfig::from_toml_str(text)?)
-    }
-
     /// The configuration the script was built from.
     pub fn config(&self) -> &ExamConfig {
         &self.config
