@@ -71,43 +71,19 @@ pub enum CsvError {
     /// The file could not be read at all.
     #[error("cannot read calibration data: {0}")]
     Io(String),
-    /// Malformed CSV (invalid UTF-8, an unterminated quote, ...).
-    #[error("line {line}: malformed CSV: {message}")]
-    Malformed {
-        /// Line number (1-based).
-        line: u64,
-        /// The CSV reader's message.
-        message: String,
-    },
-    /// A required column is absent from the header line.
-    #[error("line {line}: missing column `{column}` (header has: {found})")]
-    MissingColumn {
-        /// Line number of the header (1-based).
-        line: u64,
-        /// The required column name.
-        column: &'static str,
-        /// The columns that were found.
-        found: String,
-    },
-    /// A field could not be parsed as a finite number.
-    #[error("line {line}: column `{column}`: `{text}` is not a finite number")]
-    NotANumber {
+    /// The table itself is malformed: syntax, a missing column, a short
+    /// row, a field that is not a number (each naming its line).
+    #[error(transparent)]
+    Table(#[from] echothigh_table::TableError),
+    /// A field is a number but not a finite one (NaN, ±∞).
+    #[error("line {line}: column `{column}`: {value} is not a finite number")]
+    NotFinite {
         /// Line number (1-based).
         line: u64,
         /// Column name.
         column: &'static str,
-        /// The offending text.
-        text: String,
-    },
-    /// A row has fewer fields than the header.
-    #[error("line {line}: expected {expected} fields, found {found}")]
-    ShortRow {
-        /// Line number (1-based).
-        line: u64,
-        /// Number of header fields.
-        expected: usize,
-        /// Number of fields found.
-        found: usize,
+        /// The value.
+        value: f64,
     },
     /// Depths must increase strictly from row to row.
     #[error("line {line}: depth {depth_mm} mm does not increase (previous row: {previous_mm} mm)")]
@@ -137,38 +113,4 @@ pub enum CsvError {
         /// Rows required.
         required: usize,
     },
-}
-
-impl From<echothigh_table::TableError> for CsvError {
-    fn from(e: echothigh_table::TableError) -> Self {
-        use echothigh_table::TableError as T;
-        match e {
-            T::Io(message) => CsvError::Io(message),
-            e @ T::TooLarge { .. } => CsvError::Io(e.to_string()),
-            T::NoHeader => CsvError::TooFewRows {
-                found: 0,
-                required: crate::calibration::data::MIN_ROWS,
-            },
-            T::Syntax { line, message } => CsvError::Malformed { line, message },
-            T::MissingColumn {
-                line,
-                column,
-                found,
-            } => CsvError::MissingColumn {
-                line,
-                column,
-                found,
-            },
-            T::ShortRow {
-                line,
-                expected,
-                found,
-            } => CsvError::ShortRow {
-                line,
-                expected,
-                found,
-            },
-            T::NotANumber { line, column, text } => CsvError::NotANumber { line, column, text },
-        }
-    }
 }

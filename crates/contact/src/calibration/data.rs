@@ -61,10 +61,10 @@ impl IndentationCurve {
             let num = |i: usize, column: &'static str| -> Result<f64, CsvError> {
                 match row.number(i, column)? {
                     v if v.is_finite() => Ok(v),
-                    v => Err(CsvError::NotANumber {
+                    value => Err(CsvError::NotFinite {
                         line,
                         column,
-                        text: v.to_string(),
+                        value,
                     }),
                 }
             };
@@ -145,6 +145,7 @@ pub fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use echothigh_table::TableError;
 
     #[test]
     fn parses_with_comments_any_order_and_extra_columns() {
@@ -164,11 +165,11 @@ mod tests {
         assert!(
             matches!(
                 e,
-                CsvError::MissingColumn {
+                CsvError::Table(TableError::MissingColumn {
                     line: 2,
                     column: "force_n",
                     ..
-                }
+                })
             ),
             "{e:?}"
         );
@@ -183,14 +184,14 @@ mod tests {
             IndentationCurve::from_csv_str("depth_mm,force_n\n0,0\n# c\n1,abc\n2,2\n").unwrap_err();
         assert_eq!(
             e,
-            CsvError::NotANumber {
+            CsvError::Table(TableError::NotANumber {
                 line: 4,
                 column: "force_n",
                 text: "abc".into()
-            }
+            })
         );
         let e = IndentationCurve::from_csv_str("depth_mm,force_n\n0,0\n1,NaN\n").unwrap_err();
-        assert!(matches!(e, CsvError::NotANumber { line: 3, .. }));
+        assert!(matches!(e, CsvError::NotFinite { line: 3, .. }), "{e:?}");
     }
 
     #[test]
@@ -211,7 +212,10 @@ mod tests {
     #[test]
     fn short_rows_negative_values_and_too_few_rows() {
         let e = IndentationCurve::from_csv_str("depth_mm,force_n\n0,0\n1\n").unwrap_err();
-        assert!(matches!(e, CsvError::ShortRow { line: 3, .. }), "{e:?}");
+        assert!(
+            matches!(e, CsvError::Table(TableError::ShortRow { line: 3, .. })),
+            "{e:?}"
+        );
         let e = IndentationCurve::from_csv_str("depth_mm,force_n\n0,-1\n").unwrap_err();
         assert!(matches!(
             e,
