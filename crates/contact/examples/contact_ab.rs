@@ -13,7 +13,6 @@
 use echothigh_contact::{
     ContactParams, ContactSet, ContactSpring, LocalStiffness, PenaltyContact, Probe,
 };
-use echothigh_model::bench::{percentile, thread_cpu_us};
 use echothigh_model::{BlockSparse, ForceModel, ModelConfig, NoExtraForce, ThighModel, Vec3};
 
 /// Forwards everything but `add_scaled_jacobians`: the trait's default runs.
@@ -136,9 +135,15 @@ impl Side {
     }
 }
 
+/// Nearest-rank median (the lower of the middle two); 0 if empty.
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
-    percentile(v, 0.5)
+    v.get(v.len().saturating_sub(1) / 2).copied().unwrap_or(0.0)
+}
+
+/// CPU time consumed by this thread (µs).
+fn thread_cpu_us() -> f64 {
+    cpu_time::ThreadTime::now().as_duration().as_secs_f64() * 1e6
 }
 
 fn main() {

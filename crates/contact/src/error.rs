@@ -71,35 +71,19 @@ pub enum CsvError {
     /// The file could not be read at all.
     #[error("cannot read calibration data: {0}")]
     Io(String),
-    /// A required column is absent from the header line.
-    #[error("line {line}: missing column `{column}` (header has: {found})")]
-    MissingColumn {
-        /// Line number of the header (1-based).
-        line: u64,
-        /// The required column name.
-        column: &'static str,
-        /// The columns that were found.
-        found: String,
-    },
-    /// A field could not be parsed as a finite number.
-    #[error("line {line}: column `{column}`: `{text}` is not a finite number")]
-    NotANumber {
+    /// The table itself is malformed: syntax, a missing column, a short
+    /// row, a field that is not a number (each naming its line).
+    #[error(transparent)]
+    Table(#[from] echothigh_table::TableError),
+    /// A field is a number but not a finite one (NaN, ±∞).
+    #[error("line {line}: column `{column}`: {value} is not a finite number")]
+    NotFinite {
         /// Line number (1-based).
         line: u64,
         /// Column name.
         column: &'static str,
-        /// The offending text.
-        text: String,
-    },
-    /// A row has fewer fields than the header.
-    #[error("line {line}: expected {expected} fields, found {found}")]
-    ShortRow {
-        /// Line number (1-based).
-        line: u64,
-        /// Number of header fields.
-        expected: usize,
-        /// Number of fields found.
-        found: usize,
+        /// The value.
+        value: f64,
     },
     /// Depths must increase strictly from row to row.
     #[error("line {line}: depth {depth_mm} mm does not increase (previous row: {previous_mm} mm)")]

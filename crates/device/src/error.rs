@@ -19,15 +19,6 @@ pub enum ConfigError {
         /// What the value must satisfy.
         reason: &'static str,
     },
-    /// The TOML text does not parse (unknown key, missing field, wrong type);
-    /// the message comes from the TOML decoder and names the key and line.
-    #[error("cannot parse `[{section}]`: {message}")]
-    Parse {
-        /// The section being decoded, e.g. `exam`.
-        section: &'static str,
-        /// The decoder's message.
-        message: String,
-    },
 }
 
 impl ConfigError {
@@ -155,8 +146,12 @@ pub enum ReplayError {
         message: String,
     },
     /// A required column is absent from the header line.
-    #[error("line 1: missing column `{column}` (header must contain t,x,y,z; found: {found})")]
+    #[error(
+        "line {line}: missing column `{column}` (header must contain t,x,y,z; found: {found})"
+    )]
     MissingColumn {
+        /// 1-based line of the header.
+        line: u64,
         /// The required column name.
         column: &'static str,
         /// The header as read.
@@ -192,6 +187,12 @@ pub enum ReplayError {
         /// Time on the previous data line (s).
         previous: f64,
     },
+    /// The file is larger than [`crate::MAX_TRAJECTORY_BYTES`].
+    #[error("trajectory larger than {limit} bytes; refused")]
+    TooLarge {
+        /// The bound (bytes).
+        limit: u64,
+    },
     /// The file has a header but no data rows.
     #[error("trajectory has no data rows")]
     Empty,
@@ -201,4 +202,41 @@ pub enum ReplayError {
     /// The device limits are invalid.
     #[error(transparent)]
     Config(#[from] ConfigError),
+}
+
+impl From<echothigh_table::TableError> for ReplayError {
+    fn from(e: echothigh_table::TableError) -> Self {
+        use echothigh_table::TableError as T;
+        match e {
+            T::Io(message) => ReplayError::Io {
+                path: "(reader)".into(),
+                message,
+            },
+            T::TooLarge { limit } => ReplayError::TooLarge { limit },
+            T::NoHeader => ReplayError::Empty,
+            T::MissingColumn {
+                line,
+                column,
+                found,
+            } => ReplayError::MissingColumn {
+                line,
+                column,
+                found,
+            },
+            T::NotANumber { line, column, text } => ReplayError::NotNumeric {
+                line,
+                column,
+                value: text,
+            },
+            T::Syntax { line, message } => ReplayError::Csv { line, message },
+            T::ShortRow {
+                line,
+                expected,
+                found,
+            } => ReplayError::Csv {
+                line,
+                message: format!("expected {expected} fields, found {found}"),
+            },
+        }
+    }
 }

@@ -42,9 +42,9 @@ mod simulated;
 pub use config::{DeviceConfig, HandConfig};
 pub use device::{limit_force, DeviceFaults, ForceScale, HapticDevice};
 pub use error::{ConfigError, ReplayError};
-pub use exam::{ExamConfig, ExamInput, ExamPhase, ExamScript, ExamStatus, PhaseConfig};
+pub use exam::{ExamConfig, ExamInput, ExamPhase, ExamScript, ExamStatus, PhaseConfig, MAX_PHASES};
 pub use hand::SimulatedHand;
-pub use replay::ReplayDevice;
+pub use replay::{ReplayDevice, MAX_TRAJECTORY_BYTES};
 pub use simulated::SimulatedDevice;
 
 /// A 3-vector in the thigh frame (m, m/s or N by context).

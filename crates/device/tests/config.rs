@@ -6,10 +6,22 @@ use echothigh_device::{
 };
 
 fn key_of(e: &ConfigError) -> &str {
-    match e {
-        ConfigError::Invalid { key, .. } => key,
-        ConfigError::Parse { .. } => panic!("expected a validation error, got {e}"),
+    let ConfigError::Invalid { key, .. } = e;
+    key
+}
+
+/// Decodes `[exam]` from a scenario document as the scenario loader does
+/// (serde; other sections are the other crates') and validates it: the
+/// device crate parses no TOML itself.
+fn exam_from_toml(text: &str) -> Result<ExamConfig, String> {
+    #[derive(serde::Deserialize)]
+    struct Doc {
+        #[serde(default)]
+        exam: ExamConfig,
     }
+    let doc: Doc = toml::from_str(text).map_err(|e| e.to_string())?;
+    doc.exam.validate("exam").map_err(|e| e.to_string())?;
+    Ok(doc.exam)
 }
 
 #[test]
@@ -113,7 +125,7 @@ fn exam_toml_round_trip_and_partial_override() {
         speed = 0.05
         clearance = 0.0
     "#;
-    let cfg = ExamConfig::from_toml_str(text).unwrap();
+    let cfg = exam_from_toml(text).unwrap();
     assert_eq!(cfg.repeat, 3);
     assert_eq!(cfg.skin_point, ExamConfig::default().skin_point);
     assert_eq!(cfg.phases.len(), 3);
@@ -129,18 +141,18 @@ fn exam_toml_round_trip_and_partial_override() {
     let mut doc = toml::Table::new();
     doc.insert("exam".into(), toml::Value::try_from(&cfg).unwrap());
     let back = toml::to_string(&doc).unwrap();
-    let again = ExamConfig::from_toml_str(&back).unwrap_or_else(|e| panic!("{e}\n{back}"));
+    let again = exam_from_toml(&back).unwrap_or_else(|e| panic!("{e}\n{back}"));
     assert_eq!(again, cfg);
     // No [exam] at all: the default script.
     assert_eq!(
-        ExamConfig::from_toml_str("[hand]\nmass = 1.0\n").unwrap(),
+        exam_from_toml("[hand]\nmass = 1.0\n").unwrap(),
         ExamConfig::default()
     );
-    assert!(ExamScript::from_toml_str(text).is_ok());
+    assert!(ExamScript::new(exam_from_toml(text).unwrap()).is_ok());
 }
 
 fn parse_err(text: &str) -> String {
-    ExamConfig::from_toml_str(text).unwrap_err().to_string()
+    exam_from_toml(text).unwrap_err()
 }
 
 #[test]
@@ -211,6 +223,70 @@ fn exam_validation_errors_name_the_key() {
         })),
         "exam.phases[5].speed"
     );
-    let e = ExamConfig::from_toml_str("[exam]\nrepeat = 0\n").unwrap_err();
+    let e = exam_from_toml("[exam]\nrepeat = 0\n").unwrap_err();
     assert!(e.to_string().contains("exam.repeat"), "{e}");
+}
+
+/// The phase decoder's errors (`exam.phases[i].field`), moved from the
+/// crate's unit tests when the crate stopped parsing TOML itself.
+mod phases {
+
+    fn err(text: &str) -> String {
+        super::exam_from_toml(text).unwrap_err()
+    }
+
+    const HEAD: &str = "[exam]\nrepeat = 1\n";
+    const PHASE0: &str = "[[exam.phases]]\nkind = \"hold\"\nduration = 1.0\n";
+
+    /// Regression (issue 20): an error inside the fourth phase named
+    /// neither the phase nor the field.
+    #[test]
+    fn a_wrong_type_in_phase_3_names_phase_and_field() {
+        let text = format!(
+            "{HEAD}{PHASE0}{PHASE0}{PHASE0}[[exam.phases]]\nkind = \"release\"\n\
+             speed = \"fast\"\nclearance = 0.005\n"
+        );
+        let e = err(&text);
+        assert!(e.contains("exam.phases[3].speed"), "{e}");
+        assert!(e.contains("expected a number, found string"), "{e}");
+    }
+
+    #[test]
+    fn missing_unknown_and_extra_elements_are_named() {
+        let e = err(&format!("{HEAD}{PHASE0}[[exam.phases]]\nkind = \"hold\"\n"));
+        assert!(
+            e.contains("exam.phases[1]") && e.contains("duration"),
+            "{e}"
+        );
+        let e = err(&format!(
+            "{HEAD}[[exam.phases]]\nkind = \"hold\"\nduration = 1\nsped = 2\n"
+        ));
+        assert!(e.contains("exam.phases[0]") && e.contains("sped"), "{e}");
+        let e = err(&format!(
+            "{HEAD}[[exam.phases]]\nkind = \"slide\"\ndirection = [0, 0, 1, 5]\n\
+             distance = 0.01\nspeed = 0.01\n"
+        ));
+        assert!(
+            e.contains("exam.phases[0].direction: expected exactly 3 numbers, found 4"),
+            "{e}"
+        );
+        let e = err(&format!("{HEAD}[[exam.phases]]\nkind = \"jump\"\n"));
+        assert!(e.contains("exam.phases[0]") && e.contains("jump"), "{e}");
+        let e = err("[exam]\nstart = [0.0, 0.09, 0.0, 99.0]\n");
+        assert!(e.contains("start") || e.contains("3 numbers"), "{e}");
+    }
+
+    /// A value out of its documented range is refused naming the phase.
+    #[test]
+    fn out_of_range_phase_values_are_refused_by_key() {
+        let e = err(&format!(
+            "{HEAD}[[exam.phases]]\nkind = \"hold\"\nduration = 1e308\n"
+        ));
+        assert!(e.contains("exam.phases[0].duration"), "{e}");
+        let e = err(&format!(
+            "{HEAD}[[exam.phases]]\nkind = \"press\"\nrate = 0.04\ntarget_force = 1e9\n\
+             max_depth = 0.02\n"
+        ));
+        assert!(e.contains("exam.phases[0].target_force"), "{e}");
+    }
 }

@@ -223,3 +223,40 @@ fn default_exam_on_simulated_device_against_linear_tissue() {
     assert!((7.0..11.0).contains(&t), "exam took {t} s");
     println!("exam took {t} s, press ends {press_end_force:?} N, hold mean {mean} N");
 }
+
+/// A user script of instant phases (slides of 0 m) at the largest list and
+/// repeat count the config accepts (1000 × 1000 = 10⁶ transitions) is run one
+/// pass per advance, not all at once: after one 1 ms step the script has
+/// finished exactly one pass of its 1000 phases, and it is done after
+/// exactly `repeat` = 1000 steps. Without the bound the first step ends it.
+#[test]
+fn instant_phases_run_one_pass_per_advance() {
+    let slide = PhaseConfig::Slide {
+        direction: [0.0, 0.0, 1.0],
+        distance: 0.0,
+        speed: 0.01,
+    };
+    let config = ExamConfig {
+        repeat: 1000,
+        phases: vec![slide; echothigh_device::MAX_PHASES],
+        ..ExamConfig::default()
+    };
+    let mut script = ExamScript::new(config).unwrap();
+    let input = ExamInput {
+        position: script.setpoint(),
+        felt_tissue_force: 0.0,
+    };
+    script.advance(1e-3, input);
+    let s = script.status();
+    assert_eq!(
+        (s.phase, s.phase_index, s.repetition),
+        (ExamPhase::Slide, 0, 1)
+    );
+    for _ in 1..999 {
+        script.advance(1e-3, input);
+    }
+    assert!(!script.is_done());
+    script.advance(1e-3, input);
+    assert!(script.is_done());
+    assert_eq!(script.status().repetition, 1000);
+}

@@ -131,3 +131,32 @@ fn sample_constructor_checks_its_input() {
     let e = ReplayDevice::from_samples(vec![0.0], vec![Vec3::zeros()], bad_limits).unwrap_err();
     assert!(e.to_string().contains("device.max_force"), "{e}");
 }
+
+/// Line numbers count comment and blank lines (issue 16): the bad field
+/// stands on line 6, after a comment (line 1) and a blank line (line 4).
+#[test]
+fn error_after_a_comment_and_a_blank_line_says_line_6() {
+    let text = "# recorded on rig 2\nt,x,y,z\n0,0,0,0\n\n0.1,0,0,0\n0.2,0,abc,0\n";
+    let e = replay(text).unwrap_err();
+    assert_eq!(
+        e,
+        ReplayError::NotNumeric {
+            line: 6,
+            column: "y",
+            value: "abc".into()
+        }
+    );
+    assert!(e.to_string().starts_with("line 6:"), "{e}");
+    let e = replay("# c\n\nt,x,z\n0,0,0\n").unwrap_err();
+    assert!(
+        matches!(
+            e,
+            ReplayError::MissingColumn {
+                line: 3,
+                column: "y",
+                ..
+            }
+        ),
+        "{e}"
+    );
+}

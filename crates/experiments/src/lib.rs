@@ -11,12 +11,14 @@
 //! - [`spectrum`], [`metrics`]: the measures;
 //! - [`fig4`]: the three modes, `force.csv`, `fig4.png|svg`, `metrics.json`, the table;
 //! - [`sweep`], [`stability`]: the sweeps and the Colgate–Schenkel argument;
-//! - [`plot`]: figures (plotters), including a run's force plot.
+//! - [`plot`]: figures (plotters), including a run's force plot;
+//! - [`sheet`]: contact sheets of B-mode frames with their labels.
 
 pub mod fig4;
 pub mod metrics;
 pub mod plot;
 pub mod scenario;
+pub mod sheet;
 pub mod spectrum;
 pub mod stability;
 pub mod sweep;

@@ -14,12 +14,10 @@
 //!   `tick(p, now) -> f` with `f = k (x − p)`.
 //! - [`LoopRunner`]: a fixed-rate loop with precise sleeping, best-effort
 //!   real-time priority and a timing ring.
-//! - [`bench`]: the measurements behind `echothigh bench haptics`.
 //!
 //! Units: SI (m, N, s, N/m); thigh frame (`z` along the thigh, `y` anterior).
 #![warn(missing_docs)]
 
-pub mod bench;
 pub mod buffer;
 pub mod config;
 pub mod local_model;

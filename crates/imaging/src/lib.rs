@@ -13,7 +13,7 @@
 //! - [`Renderer`]: scatterers fixed in tissue, complex-baseband PSF,
 //!   envelope, attenuation and TGC, log compression; allocation-free
 //!   [`Renderer::render_into`].
-//! - [`write_gray_png`], [`contact_sheet`]: output.
+//! - PNG output of a frame: [`write_gray_png`].
 //!
 //! ```
 //! use echothigh_imaging::*;
@@ -33,7 +33,6 @@ mod anatomy_config;
 mod config;
 mod deformation;
 mod error;
-mod font;
 mod output;
 pub mod pressure;
 mod psf;
@@ -48,7 +47,7 @@ pub use anatomy_config::{AnatomyConfig, VeinState, VeinStateParams, MMHG};
 pub use config::{ImagingConfig, FWHM_PER_SIGMA};
 pub use deformation::{column_depth, SectionDeformation};
 pub use error::ImagingError;
-pub use output::{contact_sheet, write_gray_png, ContactSheet};
+pub use output::write_gray_png;
 pub use render::{FrameInput, Lumen, LumenReport, Phantom, Renderer};
 pub use tissue::{Acoustics, Tissue};
 pub use warp::VesselWarp;

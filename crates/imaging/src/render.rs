@@ -22,7 +22,6 @@ use crate::stages::{
     compress_column, convolve_column, splat_column, FrameGeometry, LogCompression,
 };
 use crate::warp::{compensated_ratio, VesselWarp};
-use rayon::prelude::*;
 
 /// What the application supplies each frame.
 #[derive(Debug, Clone, Copy)]
@@ -359,64 +358,6 @@ impl Renderer {
                 *px = self.gray[j * rows + i];
             }
         }
-        Ok(())
-    }
-
-    /// As [`render_into`](Self::render_into), with the columns spread over
-    /// the current rayon pool (rayon's scheduling may allocate).
-    pub fn render_into_parallel(
-        &mut self,
-        input: &FrameInput,
-        out: &mut [u8],
-    ) -> Result<(), ImagingError> {
-        self.check_out(out)?;
-        self.prepare(input)?;
-        let (t, g, f, pr) = (&self.tables, &self.geometry, &self.field, self.padded_rows);
-        let (surface, warps) = (&self.surface, &self.warps);
-        let w0 = self.window_start(self.pan_columns);
-        let pan_m = self.pan_columns as f64 * self.cfg.pixel_width();
-        self.rf.par_chunks_mut(pr).enumerate().for_each(|(b, col)| {
-            let r = f.bin_start[w0 + b] as usize..f.bin_start[w0 + b + 1] as usize;
-            splat_column(
-                t,
-                g,
-                &f.depth[r.clone()],
-                &f.amp[r],
-                surface[b],
-                &warps[b],
-                col,
-            );
-        });
-        let rows = self.cfg.rows;
-        let (rf, pad) = (&self.rf, self.pad);
-        self.iq
-            .par_chunks_mut(rows)
-            .enumerate()
-            .for_each(|(j, col)| convolve_column(t, rf, pr, pad, j, col));
-        let (h, lc, anatomy, bin_u) = (f.halo, &self.lc, self.anatomy.as_ref(), &self.bin_u);
-        self.gray
-            .par_chunks_mut(rows)
-            .zip(self.iq.par_chunks(rows))
-            .enumerate()
-            .for_each(|(j, (col, iq))| {
-                let b = j + h;
-                compress_column(
-                    lc,
-                    g,
-                    anatomy,
-                    bin_u[b] + pan_m,
-                    surface[b],
-                    &warps[b],
-                    iq,
-                    col,
-                );
-            });
-        let (cols, gray) = (self.cfg.columns, &self.gray);
-        out.par_chunks_mut(cols).enumerate().for_each(|(i, row)| {
-            for (j, px) in row.iter_mut().enumerate() {
-                *px = gray[j * rows + i];
-            }
-        });
         Ok(())
     }
 

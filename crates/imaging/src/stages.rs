@@ -1,6 +1,6 @@
-//! The per-column stages of a frame, shared by the serial and the parallel
-//! renderer: axial splat of the scatterers (complex baseband PSF), lateral
-//! convolution, and attenuation/TGC plus log compression.
+//! The per-column stages of a frame, run by the renderer: axial splat of
+//! the scatterers (complex baseband PSF), lateral convolution, and
+//! attenuation/TGC plus log compression.
 
 use crate::anatomy::{Anatomy, MAX_BREAKPOINTS};
 use crate::deformation::column_depth;

@@ -17,7 +17,6 @@
 //! Units are SI (m, N, s, kg). Frame: z along the thigh, x lateral, y anterior.
 #![warn(missing_docs)]
 
-pub mod bench;
 pub mod block_sparse;
 pub mod checkpoint;
 pub mod config;

@@ -3,9 +3,34 @@
 use echothigh_model::{ConfigError, ModelConfig, ThighModel};
 use serde::Deserialize;
 
+/// Why a document was refused: it does not decode (serde), or a value is
+/// out of range (validation).
+#[derive(Debug)]
+enum ParseError {
+    Decode(String),
+    Invalid(ConfigError),
+}
+
+impl std::fmt::Display for ParseError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ParseError::Decode(m) => f.write_str(m),
+            ParseError::Invalid(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+/// Decodes and validates a `[thigh]`/`[tissue]`/`[integrator]` document as
+/// the scenario loader does (the model crate parses no TOML itself).
+fn from_toml(text: &str) -> Result<ModelConfig, ParseError> {
+    let c: ModelConfig = toml::from_str(text).map_err(|e| ParseError::Decode(e.to_string()))?;
+    c.validate("").map_err(ParseError::Invalid)?;
+    Ok(c)
+}
+
 fn key_of(text: &str) -> String {
-    match ModelConfig::from_toml_str(text) {
-        Err(ConfigError::Invalid { key, .. }) => key,
+    match from_toml(text) {
+        Err(ParseError::Invalid(ConfigError::Invalid { key, .. })) => key,
         other => panic!("expected an Invalid error for {text:?}, got {other:?}"),
     }
 }
@@ -14,7 +39,7 @@ fn key_of(text: &str) -> String {
 fn defaults_are_valid_and_plausible() {
     let c = ModelConfig::default();
     c.validate("").unwrap();
-    assert_eq!(ModelConfig::from_toml_str("").unwrap(), c);
+    assert_eq!(from_toml("").unwrap(), c);
     let m = ThighModel::new(&c).unwrap();
     assert_eq!(m.node_count(), 48 * 21);
     // Circumference of the default ellipse ≈ 0.48 m; mass ≈ areal density × area.
@@ -27,7 +52,7 @@ fn defaults_are_valid_and_plausible() {
 
 #[test]
 fn parses_partial_sections() {
-    let c = ModelConfig::from_toml_str(
+    let c = from_toml(
         "[thigh]\nn_theta = 32\nhold_ends = false\n[tissue]\nnormal_b = 1.0e-6\n\
          [integrator]\nlambda = 0.5\npreconditioner = \"none\"\n",
     )
@@ -73,7 +98,7 @@ fn invalid_values_name_their_key() {
         "thigh.tissue_thickness"
     );
     // Message format.
-    let e = ModelConfig::from_toml_str("[tissue]\nareal_density = -1.0").unwrap_err();
+    let e = from_toml("[tissue]\nareal_density = -1.0").unwrap_err();
     assert_eq!(
         e.to_string(),
         "tissue.areal_density must be in [1, 200] kg/m² (soft tissue ~1000 kg/m³ over 1 mm \
@@ -83,12 +108,12 @@ fn invalid_values_name_their_key() {
 
 #[test]
 fn unknown_keys_and_wrong_types_are_rejected_with_their_name() {
-    let e = ModelConfig::from_toml_str("[tissue]\nnode_mas = 1.0").unwrap_err();
-    assert!(matches!(e, ConfigError::Parse(_)));
+    let e = from_toml("[tissue]\nnode_mas = 1.0").unwrap_err();
+    assert!(matches!(e, ParseError::Decode(_)));
     assert!(e.to_string().contains("node_mas"), "{e}");
-    let e = ModelConfig::from_toml_str("[thigh]\nn_theta = -3").unwrap_err();
+    let e = from_toml("[thigh]\nn_theta = -3").unwrap_err();
     assert!(e.to_string().contains("n_theta"), "{e}");
-    let e = ModelConfig::from_toml_str("[solver]\nx = 1").unwrap_err();
+    let e = from_toml("[solver]\nx = 1").unwrap_err();
     assert!(e.to_string().contains("solver"), "{e}");
 }
 
@@ -115,7 +140,7 @@ fn sections_embed_in_a_larger_scenario_with_a_prefix() {
 fn round_trips_through_toml() {
     let c = ModelConfig::default();
     let text = toml::to_string(&c).unwrap();
-    assert_eq!(ModelConfig::from_toml_str(&text).unwrap(), c);
+    assert_eq!(from_toml(&text).unwrap(), c);
 }
 
 /// Regression (issue 20): values that passed the sign checks but no
@@ -124,26 +149,25 @@ fn round_trips_through_toml() {
 /// and its reason.
 #[test]
 fn physically_absurd_values_are_refused_with_range_unit_and_reason() {
-    let e = ModelConfig::from_toml_str("[thigh]\nlength = 1e308").unwrap_err();
+    let e = from_toml("[thigh]\nlength = 1e308").unwrap_err();
     assert_eq!(
         e.to_string(),
         "thigh.length must be in [0.1, 1] m (a human thigh segment), got 1e308"
     );
-    let e = ModelConfig::from_toml_str("[integrator]\nlambda = 0.49").unwrap_err();
+    let e = from_toml("[integrator]\nlambda = 0.49").unwrap_err();
     assert!(
         e.to_string()
             .starts_with("integrator.lambda must be in [0.5, 1]"),
         "{e}"
     );
     assert!(e.to_string().contains("unconditionally stable"), "{e}");
-    let e =
-        ModelConfig::from_toml_str("[integrator]\nnewton_max_iterations = 1000000000").unwrap_err();
+    let e = from_toml("[integrator]\nnewton_max_iterations = 1000000000").unwrap_err();
     assert!(
         e.to_string()
             .starts_with("integrator.newton_max_iterations must be in [1, 100]"),
         "{e}"
     );
-    let e = ModelConfig::from_toml_str("[thigh]\nfemur_offset = [0.0, -0.01, 99.0]").unwrap_err();
+    let e = from_toml("[thigh]\nfemur_offset = [0.0, -0.01, 99.0]").unwrap_err();
     assert!(e.to_string().contains("exactly 2 numbers"), "{e}");
-    assert!(ModelConfig::from_toml_str("[integrator]\nlambda = 0.5").is_ok());
+    assert!(from_toml("[integrator]\nlambda = 0.5").is_ok());
 }

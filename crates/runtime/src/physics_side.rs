@@ -90,6 +90,11 @@ impl PhysicsSide {
             cg_iterations: step.physics.cg_iterations,
             limited: step.physics.limited,
             compute_time: 0.0,
+            stages: {
+                let mut t = step.physics.timings;
+                t.accumulate(&step.query.timings);
+                t
+            },
         };
         (msg, rec)
     }

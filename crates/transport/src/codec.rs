@@ -328,6 +328,37 @@ mod tests {
         ));
     }
 
+    /// The physics' "no surface near the probe" is `D = +∞`: sent raw it is
+    /// refused (the limits want every field finite), so it travels as
+    /// [`crate::wire_query`]'s finite sentinel with its own contact state and
+    /// arrives as exactly that pair.
+    #[test]
+    fn no_contact_crosses_the_wire_as_its_sentinel() {
+        let Message::Sample(base) = every_message()[1] else {
+            unreachable!("every_message()[1] is a Sample")
+        };
+        let mut buf = [0u8; crate::MAX_DATAGRAM_SIZE];
+        let raw = Message::Sample(SampleMsg {
+            distance: f64::INFINITY,
+            contact: contact_state::SEPARATED,
+            ..base
+        });
+        let e = seal(&raw, &key(), &mut buf).unwrap_err();
+        assert!(e.to_string().contains("distance"), "{e}");
+
+        let (distance, contact) = crate::wire_query(f64::INFINITY, false);
+        let msg = Message::Sample(SampleMsg {
+            distance,
+            contact,
+            ..base
+        });
+        let Message::Sample(back) = open(&sealed(&msg), &key(), SESSION).unwrap() else {
+            panic!("a Sample came back as another kind")
+        };
+        assert_eq!(back.contact, contact_state::NO_SURFACE);
+        assert_eq!(back.distance, crate::NO_SURFACE_DISTANCE);
+    }
+
     #[test]
     fn decode_accepts_unaligned_buffers() {
         let bytes = sealed(&every_message()[1]);

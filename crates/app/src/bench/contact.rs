@@ -3,9 +3,10 @@
 //! haptic queries (distance, gradient, stiffness) per step. The physics
 //! bench calls [`contact_report`] and merges its JSON.
 
+use super::clock::thread_cpu_us;
+use super::physics_cases::stage_medians;
 use anyhow::{Context, Result};
 use echothigh_contact::{ContactParams, Probe, ProbeContact};
-use echothigh_model::bench::{stage_medians, thread_cpu_us};
 use echothigh_model::{ModelConfig, StepTimings, ThighModel, Vec3};
 use serde_json::{json, Value};
 use std::time::Instant;

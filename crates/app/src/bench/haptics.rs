@@ -5,8 +5,8 @@
 
 use std::path::PathBuf;
 
+use super::haptics_cases::{self as bench, BenchOptions, BenchReport};
 use anyhow::Context;
-use echothigh_haptics::bench::{self, BenchOptions, BenchReport};
 use echothigh_haptics::LoopConfig;
 
 /// Arguments of `echothigh bench haptics`.

@@ -1,6 +1,7 @@
 //! `echothigh bench image`: frame rate of the B-mode renderer at the
-//! configured size, on one core (the allocation-free serial path) and on all
-//! cores (rayon over image columns), under a press that varies every frame.
+//! configured size, on one core (the renderer is serial and allocation-free:
+//! the viewer renders on its own imaging thread), under a press that varies
+//! every frame.
 
 use anyhow::{Context, Result};
 use echothigh_imaging::{FrameInput, ImagingConfig, Renderer, SectionDeformation, VeinState};
@@ -16,7 +17,7 @@ pub struct Args {
     /// Also write the JSON report to this file.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Frames timed per mode (after 10 warm-up frames).
+    /// Frames timed (after 10 warm-up frames).
     #[arg(long, default_value_t = 300)]
     pub frames: usize,
 }
@@ -50,12 +51,7 @@ fn timing(mut t: Vec<f64>, threads: usize) -> Timing {
     }
 }
 
-fn run_mode(
-    r: &mut Renderer,
-    presses: &[SectionDeformation],
-    frames: usize,
-    parallel: bool,
-) -> Result<Vec<f64>> {
+fn run_frames(r: &mut Renderer, presses: &[SectionDeformation], frames: usize) -> Result<Vec<f64>> {
     let (w, h) = r.frame_size();
     let mut out = vec![0u8; w * h];
     let mut times = Vec::with_capacity(frames);
@@ -69,11 +65,7 @@ fn run_mode(
             lateral_offset: 0.0,
         };
         let t0 = Instant::now();
-        if parallel {
-            r.render_into_parallel(&input, &mut out)?;
-        } else {
-            r.render_into(&input, &mut out)?;
-        }
+        r.render_into(&input, &mut out)?;
         let dt = t0.elapsed().as_secs_f64();
         if k >= 10 {
             times.push(dt);
@@ -96,8 +88,7 @@ pub fn run(args: Args) -> Result<()> {
             SectionDeformation::flat_press(depth, cfg.probe_width, 1.5e-3, bone)
         })
         .collect::<Result<_, _>>()?;
-    let one = run_mode(&mut r, &presses, args.frames, false)?;
-    let all = run_mode(&mut r, &presses, args.frames, true)?;
+    let one = run_frames(&mut r, &presses, args.frames)?;
     let report = serde_json::json!({
         "benchmark": "image",
         "profile": if cfg!(debug_assertions) { "debug" } else { "release" },
@@ -107,7 +98,6 @@ pub fn run(args: Args) -> Result<()> {
         "depth_m": cfg.depth,
         "scatterers": r.scatterer_count(),
         "one_core": timing(one, 1),
-        "all_cores": timing(all, rayon::current_num_threads()),
         "goal_fps_one_core": 60.0,
     });
     let text = serde_json::to_string_pretty(&report)?;
@@ -115,12 +105,10 @@ pub fn run(args: Args) -> Result<()> {
         println!("{text}");
     } else {
         println!(
-            "image {}x{}: one core {:.0} fps (median), {} threads {:.0} fps",
+            "image {}x{}: one core {:.0} fps (median)",
             cfg.columns,
             cfg.rows,
             report["one_core"]["fps_median"].as_f64().unwrap_or(0.0),
-            rayon::current_num_threads(),
-            report["all_cores"]["fps_median"].as_f64().unwrap_or(0.0)
         );
     }
     if let Some(path) = &args.out {

@@ -1,10 +1,13 @@
 //! `echothigh bench ...`: benchmarks that print and write JSON reports.
 
+pub mod clock;
 pub mod contact;
 pub mod haptics;
+pub mod haptics_cases;
 pub mod image;
 pub mod link;
 pub mod physics;
+pub mod physics_cases;
 
 use clap::Subcommand;
 

@@ -2,7 +2,7 @@
 //! Newton iterations per step and steps per second, for meshes of about 500,
 //! 1 000 (the default), 2 000, 8 000, 10 000 and 32 000 nodes, in three
 //! scenarios (free motion under gravity, a constant 10 N probe-patch load, a
-//! 0–15 N press at 1 Hz; see `echothigh_model::bench`). One run's numbers on
+//! 0–15 N press at 1 Hz; see [`super::physics_cases`]). One run's numbers on
 //! one thread, as wall-clock time and as the thread's CPU time (the per-core
 //! cost, which other processes on a shared machine do not inflate). Each
 //! case also reports the median time of each stage of the step
@@ -10,8 +10,8 @@
 
 use std::path::PathBuf;
 
+use super::physics_cases::{run_case, CaseReport, Scenario, SIZES};
 use anyhow::Context;
-use echothigh_model::bench::{run_case, CaseReport, Scenario, SIZES};
 
 /// Arguments of `echothigh bench physics`.
 #[derive(clap::Args, Debug)]

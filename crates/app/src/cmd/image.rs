@@ -8,9 +8,7 @@
 //! (`runtime::section`), so the image and the force agree.
 
 use anyhow::{Context, Result};
-use echothigh_imaging::{
-    contact_sheet, write_gray_png, Anatomy, FrameInput, ImagingConfig, Renderer, VeinState,
-};
+use echothigh_imaging::{write_gray_png, Anatomy, FrameInput, ImagingConfig, Renderer, VeinState};
 use echothigh_runtime::physics_side::PhysicsSide;
 use echothigh_runtime::scenario::Scenario;
 use echothigh_runtime::section::{press_to_force, StaticPress};
@@ -169,7 +167,8 @@ pub fn run(args: Args) -> Result<()> {
     let rows: Vec<&str> = VeinState::ALL.iter().map(|s| s.name()).collect();
     let cols: Vec<String> = args.forces.iter().map(|f| format!("{f} N")).collect();
     let cols: Vec<&str> = cols.iter().map(|s| s.as_str()).collect();
-    let sheet = contact_sheet(&refs, cfg.columns, cfg.rows, &rows, &cols)?;
+    let sheet =
+        echothigh_experiments::sheet::contact_sheet(&refs, cfg.columns, cfg.rows, &rows, &cols)?;
     let path = args.out.join("contact_sheet.png");
     write_gray_png(&path, sheet.width, sheet.height, &sheet.pixels)?;
     println!("contact sheet: {}", path.display());

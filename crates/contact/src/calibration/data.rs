@@ -11,12 +11,11 @@
 //! columns are ignored): `depth_mm`, the probe's displacement from first
 //! contact (mm, ≥ 0, strictly increasing), and `force_n`, the normal force on
 //! the probe (N, ≥ 0). Every error names its line (1-based, counting comment
-//! lines). Fields are plain comma-separated values (surrounding double quotes
-//! are stripped; quoted commas are not supported: numbers need none). Parsed
-//! by hand rather than with the `csv` crate, whose record positions do not
-//! count comment lines.
+//! and blank lines). Read and written with the project's one CSV reader and
+//! writer, [`echothigh_table`].
 
 use crate::error::CsvError;
+use echothigh_table::Table;
 use std::io::Read;
 use std::path::Path;
 
@@ -36,16 +35,6 @@ pub const MIN_ROWS: usize = 3;
 /// has tens to thousands of rows of ~20 bytes.
 pub const MAX_CSV_BYTES: u64 = 1 << 20;
 
-/// At most 40 characters of a field for an error message, with its length
-/// when cut (a 50 MB "number" was echoed whole).
-fn excerpt(text: &str) -> String {
-    const KEEP: usize = 40;
-    match text.char_indices().nth(KEEP) {
-        None => text.to_string(),
-        Some((cut, _)) => format!("{}… ({} bytes)", &text[..cut], text.len()),
-    }
-}
-
 impl IndentationCurve {
     /// Parses the CSV text described in the module docs.
     pub fn from_csv_str(text: &str) -> Result<Self, CsvError> {
@@ -59,61 +48,23 @@ impl IndentationCurve {
         Self::from_reader(f)
     }
 
-    /// Parses CSV from any reader.
-    /// Input beyond [`MAX_CSV_BYTES`] is refused.
+    /// Parses CSV from any reader (the project's one reader,
+    /// [`echothigh_table`]). Input beyond [`MAX_CSV_BYTES`] is refused.
     pub fn from_reader(r: impl Read) -> Result<Self, CsvError> {
-        let mut text = String::new();
-        r.take(MAX_CSV_BYTES + 1)
-            .read_to_string(&mut text)
-            .map_err(|e| CsvError::Io(e.to_string()))?;
-        if text.len() as u64 > MAX_CSV_BYTES {
-            return Err(CsvError::Io(format!(
-                "the data is larger than {MAX_CSV_BYTES} bytes (1 MiB); refused"
-            )));
-        }
-        let mut lines = text
-            .lines()
-            .enumerate()
-            .map(|(i, l)| (i as u64 + 1, l.trim()))
-            .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
-        let Some((header_line, header)) = lines.next() else {
-            return Err(CsvError::TooFewRows {
-                found: 0,
-                required: MIN_ROWS,
-            });
-        };
-        let headers: Vec<&str> = fields(header).collect();
-        let find = |name: &'static str| {
-            headers
-                .iter()
-                .position(|h| h.eq_ignore_ascii_case(name))
-                .ok_or_else(|| CsvError::MissingColumn {
-                    line: header_line,
-                    column: name,
-                    found: headers.join(","),
-                })
-        };
-        let i_depth = find("depth_mm")?;
-        let i_force = find("force_n")?;
-        let mut depth = Vec::new();
-        let mut force = Vec::new();
-        for (line, l) in lines {
-            let rec: Vec<&str> = fields(l).collect();
-            if rec.len() < headers.len() {
-                return Err(CsvError::ShortRow {
-                    line,
-                    expected: headers.len(),
-                    found: rec.len(),
-                });
-            }
+        let table = Table::read(r, MAX_CSV_BYTES)?;
+        let i_depth = table.column("depth_mm")?;
+        let i_force = table.column("force_n")?;
+        let mut depth = Vec::with_capacity(table.rows().len());
+        let mut force = Vec::with_capacity(table.rows().len());
+        for row in table.rows() {
+            let line = row.line;
             let num = |i: usize, column: &'static str| -> Result<f64, CsvError> {
-                let text = rec[i];
-                match text.parse::<f64>() {
-                    Ok(v) if v.is_finite() => Ok(v),
-                    _ => Err(CsvError::NotANumber {
+                match row.number(i, column)? {
+                    v if v.is_finite() => Ok(v),
+                    value => Err(CsvError::NotFinite {
                         line,
                         column,
-                        text: excerpt(text),
+                        value,
                     }),
                 }
             };
@@ -153,17 +104,15 @@ impl IndentationCurve {
     /// Writes the curve as CSV text (`depth_mm,force_n`), with `comment`
     /// lines first (each prefixed by `# `).
     pub fn to_csv_string(&self, comment: &str) -> String {
-        let mut s = String::new();
-        for l in comment.lines() {
-            s.push_str("# ");
-            s.push_str(l);
-            s.push('\n');
-        }
-        s.push_str("depth_mm,force_n\n");
-        for (d, f) in self.depth.iter().zip(&self.force) {
-            s.push_str(&format!("{:.3},{:.5}\n", d * 1e3, f));
-        }
-        s
+        let rows = self
+            .depth
+            .iter()
+            .zip(&self.force)
+            .map(|(d, f)| [format!("{:.3}", d * 1e3), format!("{f:.5}")]);
+        let mut out = Vec::new();
+        echothigh_table::write(&mut out, comment, &["depth_mm", "force_n"], rows)
+            .expect("writing to memory cannot fail");
+        String::from_utf8(out).expect("the fields are ASCII numbers")
     }
 
     /// Linear interpolation of the force at depth `d` (m), clamped to the
@@ -171,12 +120,6 @@ impl IndentationCurve {
     pub fn force_at(&self, d: f64) -> f64 {
         interpolate(&self.depth, &self.force, d)
     }
-}
-
-/// The comma-separated fields of a line, trimmed, surrounding double quotes
-/// removed.
-fn fields(line: &str) -> impl Iterator<Item = &str> {
-    line.split(',').map(|f| f.trim().trim_matches('"').trim())
 }
 
 /// Piecewise-linear interpolation of `(xs, ys)` at `x`, `xs` increasing,
@@ -202,6 +145,7 @@ pub fn interpolate(xs: &[f64], ys: &[f64], x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use echothigh_table::TableError;
 
     #[test]
     fn parses_with_comments_any_order_and_extra_columns() {
@@ -221,11 +165,11 @@ mod tests {
         assert!(
             matches!(
                 e,
-                CsvError::MissingColumn {
+                CsvError::Table(TableError::MissingColumn {
                     line: 2,
                     column: "force_n",
                     ..
-                }
+                })
             ),
             "{e:?}"
         );
@@ -240,14 +184,14 @@ mod tests {
             IndentationCurve::from_csv_str("depth_mm,force_n\n0,0\n# c\n1,abc\n2,2\n").unwrap_err();
         assert_eq!(
             e,
-            CsvError::NotANumber {
+            CsvError::Table(TableError::NotANumber {
                 line: 4,
                 column: "force_n",
                 text: "abc".into()
-            }
+            })
         );
         let e = IndentationCurve::from_csv_str("depth_mm,force_n\n0,0\n1,NaN\n").unwrap_err();
-        assert!(matches!(e, CsvError::NotANumber { line: 3, .. }));
+        assert!(matches!(e, CsvError::NotFinite { line: 3, .. }), "{e:?}");
     }
 
     #[test]
@@ -268,7 +212,10 @@ mod tests {
     #[test]
     fn short_rows_negative_values_and_too_few_rows() {
         let e = IndentationCurve::from_csv_str("depth_mm,force_n\n0,0\n1\n").unwrap_err();
-        assert!(matches!(e, CsvError::ShortRow { line: 3, .. }), "{e:?}");
+        assert!(
+            matches!(e, CsvError::Table(TableError::ShortRow { line: 3, .. })),
+            "{e:?}"
+        );
         let e = IndentationCurve::from_csv_str("depth_mm,force_n\n0,-1\n").unwrap_err();
         assert!(matches!(
             e,

@@ -43,6 +43,7 @@
 //! the thigh axis on a generalized cylinder keeps the skin height). Depth
 //! below the skin of a point `x` is `(x − skin_point) · d̂`.
 
+use super::ExamPhase;
 use crate::error::ConfigError;
 use serde::{Deserialize, Serialize};
 
@@ -99,6 +100,19 @@ pub enum PhaseConfig {
         /// in [0, 0.1].
         clearance: f64,
     },
+}
+
+impl PhaseConfig {
+    /// Which kind of phase this is (the script's [`ExamPhase`] while it runs).
+    pub fn kind(&self) -> ExamPhase {
+        match self {
+            PhaseConfig::Approach { .. } => ExamPhase::Approach,
+            PhaseConfig::Press { .. } => ExamPhase::Press,
+            PhaseConfig::Hold { .. } => ExamPhase::Hold,
+            PhaseConfig::Slide { .. } => ExamPhase::Slide,
+            PhaseConfig::Release { .. } => ExamPhase::Release,
+        }
+    }
 }
 
 /// The exam script (`[exam]`): a start setpoint, the skin's local geometry,
@@ -189,25 +203,6 @@ fn unit(a: [f64; 3]) -> [f64; 3] {
 }
 
 impl ExamConfig {
-    /// Parses the `[exam]` section of a scenario TOML document. Other
-    /// sections are ignored (they belong to other crates); a document without
-    /// `[exam]` gives the default script. Unknown keys inside `[exam]`,
-    /// missing phase fields and wrong types are errors naming the key; the
-    /// result is validated.
-    pub fn from_toml_str(text: &str) -> Result<Self, ConfigError> {
-        let parse = |e: toml::de::Error| ConfigError::Parse {
-            section: "exam",
-            message: e.to_string(),
-        };
-        let mut table: toml::Table = toml::from_str(text).map_err(parse)?;
-        let config = match table.remove("exam") {
-            None => ExamConfig::default(),
-            Some(value) => value.try_into::<ExamConfig>().map_err(parse)?,
-        };
-        config.validate("exam")?;
-        Ok(config)
-    }
-
     /// Checks every field, naming the offending key as `"{prefix}.{field}"`
     /// and phases as `"{prefix}.phases[i].{field}"`.
     pub fn validate(&self, prefix: &str) -> Result<(), ConfigError> {

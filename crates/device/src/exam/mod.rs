@@ -5,5 +5,5 @@ mod config;
 mod phases;
 mod script;
 
-pub use config::{ExamConfig, PhaseConfig};
+pub use config::{ExamConfig, PhaseConfig, MAX_PHASES};
 pub use script::{ExamInput, ExamPhase, ExamScript, ExamStatus};

@@ -67,37 +67,14 @@ pub struct ExamInput {
     pub felt_tissue_force: f64,
 }
 
-#[derive(Debug, Clone, Copy)]
-enum Phase {
-    Approach {
-        point: Vec3,
-        speed: f64,
-    },
-    Press {
-        rate: f64,
-        target_force: f64,
-        max_depth: f64,
-    },
-    Hold {
-        duration: f64,
-    },
-    Slide {
-        direction: Vec3,
-        distance: f64,
-        speed: f64,
-    },
-    Release {
-        speed: f64,
-        clearance: f64,
-    },
-}
-
 /// The running exam script: the hand's setpoint as a function of time and of
 /// what the hand feels.
 #[derive(Debug, Clone)]
 pub struct ExamScript {
     config: ExamConfig,
-    phases: Vec<Phase>,
+    /// The configured phases, slide directions already made unit and
+    /// perpendicular to the press direction.
+    phases: Vec<PhaseConfig>,
     skin_point: Vec3,
     press_direction: Vec3,
     setpoint: Vec3,
@@ -135,33 +112,20 @@ impl ExamScript {
             .phases
             .iter()
             .map(|p| match *p {
-                PhaseConfig::Approach { point, speed } => Phase::Approach {
-                    point: v3(point),
-                    speed,
-                },
-                PhaseConfig::Press {
-                    rate,
-                    target_force,
-                    max_depth,
-                } => Phase::Press {
-                    rate,
-                    target_force,
-                    max_depth,
-                },
-                PhaseConfig::Hold { duration } => Phase::Hold { duration },
                 PhaseConfig::Slide {
                     direction,
                     distance,
                     speed,
                 } => {
                     let u = v3(direction);
-                    Phase::Slide {
-                        direction: (u - d * u.dot(&d)).normalize(),
+                    let along = (u - d * u.dot(&d)).normalize();
+                    PhaseConfig::Slide {
+                        direction: [along.x, along.y, along.z],
                         distance,
                         speed,
                     }
                 }
-                PhaseConfig::Release { speed, clearance } => Phase::Release { speed, clearance },
+                other => other,
             })
             .collect();
         let start = v3(config.start);
@@ -179,12 +143,6 @@ impl ExamScript {
             entered: false,
             config,
         })
-    }
-
-    /// Parses `[exam]` from a scenario TOML document and builds the script
-    /// (see [`ExamConfig::from_toml_str`]).
-    pub fn from_toml_str(text: &str) -> Result<Self, ConfigError> {
-        Self::new(ExamConfig::from_toml_str(text)?)
     }
 
     /// The configuration the script was built from.
@@ -225,14 +183,10 @@ impl ExamScript {
 
     /// Where the script is.
     pub fn status(&self) -> ExamStatus {
-        let phase = match self.phases.get(self.index) {
-            None => ExamPhase::Done,
-            Some(Phase::Approach { .. }) => ExamPhase::Approach,
-            Some(Phase::Press { .. }) => ExamPhase::Press,
-            Some(Phase::Hold { .. }) => ExamPhase::Hold,
-            Some(Phase::Slide { .. }) => ExamPhase::Slide,
-            Some(Phase::Release { .. }) => ExamPhase::Release,
-        };
+        let phase = self
+            .phases
+            .get(self.index)
+            .map_or(ExamPhase::Done, PhaseConfig::kind);
         ExamStatus {
             phase,
             phase_index: self.index,
@@ -271,6 +225,14 @@ impl ExamScript {
     ///
     /// The press ends when `input.felt_tissue_force ≥ target_force` or the
     /// probe's depth `(input.position − skin_point)·d̂ ≥ max_depth`.
+    ///
+    /// Bounded: one advance ends at most `phases.len()` phases (one pass of
+    /// the list). Phases can take no time (a slide of 0 m, an approach to
+    /// where the setpoint is, a press already at its force), so without the
+    /// bound a script of instant phases would run all its `repeat ×
+    /// phases` (up to 10⁶) transitions inside one 1 ms tick. A step that
+    /// would complete more than a pass leaves the rest of its time unused
+    /// (the script then lags the clock by it).
     pub fn advance(&mut self, dt: f64, input: ExamInput) -> Vec3 {
         if !(dt.is_finite() && dt > 0.0) {
             return self.setpoint;
@@ -278,25 +240,26 @@ impl ExamScript {
         let before = self.setpoint;
         self.time += dt;
         let mut remaining = dt;
+        let mut transitions = 0;
         while let Some(&phase) = self.phases.get(self.index) {
             if !self.entered {
                 self.entered = true;
-                if let Phase::Slide {
+                if let PhaseConfig::Slide {
                     direction,
                     distance,
                     ..
                 } = phase
                 {
-                    self.slide_target = self.setpoint + direction * distance;
+                    self.slide_target = self.setpoint + v3(direction) * distance;
                 }
             }
             let (used, complete) = match phase {
-                Phase::Approach { point, speed } => {
-                    let (p, used, done) = move_toward(self.setpoint, point, speed, remaining);
+                PhaseConfig::Approach { point, speed } => {
+                    let (p, used, done) = move_toward(self.setpoint, v3(point), speed, remaining);
                     self.setpoint = p;
                     (used, done)
                 }
-                Phase::Press {
+                PhaseConfig::Press {
                     rate,
                     target_force,
                     max_depth,
@@ -310,7 +273,7 @@ impl ExamScript {
                         (remaining, false)
                     }
                 }
-                Phase::Hold { duration } => {
+                PhaseConfig::Hold { duration } => {
                     let left = (duration - self.phase_time).max(0.0);
                     if left <= remaining {
                         (left, true)
@@ -318,13 +281,13 @@ impl ExamScript {
                         (remaining, false)
                     }
                 }
-                Phase::Slide { speed, .. } => {
+                PhaseConfig::Slide { speed, .. } => {
                     let (p, used, done) =
                         move_toward(self.setpoint, self.slide_target, speed, remaining);
                     self.setpoint = p;
                     (used, done)
                 }
-                Phase::Release { speed, clearance } => {
+                PhaseConfig::Release { speed, clearance } => {
                     let to_go = self.depth(self.setpoint) + clearance;
                     if to_go <= speed * remaining {
                         self.setpoint -= self.press_direction * to_go.max(0.0);
@@ -341,7 +304,8 @@ impl ExamScript {
                 break;
             }
             self.next_phase();
-            if remaining <= 0.0 {
+            transitions += 1;
+            if remaining <= 0.0 || transitions >= self.phases.len() {
                 break;
             }
         }

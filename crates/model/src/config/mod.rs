@@ -28,9 +28,6 @@ pub enum ConfigError {
         /// What is wrong, e.g. `must be > 0, got -1`.
         message: String,
     },
-    /// The TOML text could not be parsed (unknown key, wrong type, syntax).
-    #[error("invalid model configuration: {0}")]
-    Parse(String),
 }
 
 impl ConfigError {
@@ -136,7 +133,9 @@ pub(crate) fn in_range(
     }
 }
 
-/// The physical model's whole configuration: `[thigh]`, `[tissue]`, `[integrator]`.
+/// The physical model's whole configuration: `[thigh]`, `[tissue]`,
+/// `[integrator]`. Serde types and validation only: the scenario loader
+/// (`echothigh_runtime::scenario`) is the one place that parses TOML.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ModelConfig {
@@ -149,15 +148,6 @@ pub struct ModelConfig {
 }
 
 impl ModelConfig {
-    /// Parses a TOML document with optional `[thigh]`, `[tissue]`,
-    /// `[integrator]` tables (missing keys take their defaults) and validates it.
-    pub fn from_toml_str(text: &str) -> Result<Self, ConfigError> {
-        let config: ModelConfig =
-            toml::from_str(text).map_err(|e| ConfigError::Parse(e.to_string()))?;
-        config.validate("")?;
-        Ok(config)
-    }
-
     /// Validates every section (keys `{prefix}.thigh.*`, ...) and the
     /// cross-section constraint `tissue.normal_b / tissue.normal_a <
     /// thigh.tissue_thickness` (the asymptote of the normal springs must be

@@ -11,9 +11,10 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
-use crate::config::{ConfigError, FitConfig, LoopConfig, RenderConfig};
-use crate::runner::{LoopRunner, Percentiles, TimingSummary};
-use crate::{handoff, HapticRenderer, ModelManager, Sample, Vec3};
+use echothigh_haptics::{
+    handoff, ConfigError, FitConfig, HapticRenderer, LoopConfig, LoopRunner, ModelManager,
+    Percentiles, RenderConfig, Sample, TimingSummary, Vec3,
+};
 
 /// What to measure.
 #[derive(Debug, Clone, PartialEq)]

@@ -1,6 +1,5 @@
-//! Benchmark scenarios of the physics step (timed with `std::time::Instant`
-//! and the thread's CPU clock, no I/O): used by `echothigh bench physics` and the crate's example and
-//! criterion bench, so every front end times the same thing.
+//! Benchmark scenarios of the physics step behind `echothigh bench physics`
+//! (timed with `std::time::Instant` and the thread's CPU clock, no I/O).
 //!
 //! Scenarios, all with the default tissue and integrator, `h` = 10 ms,
 //! starting at rest:
@@ -13,11 +12,8 @@
 //! - `press`: the same patch with a load `15 N · ½(1 − cos 2π f t)` at
 //!   f = 1 Hz: the tissue is never at rest (a probe pressing and releasing).
 
-use crate::config::{ConfigError, ModelConfig};
-use crate::force_model::NoExtraForce;
-use crate::thigh::ThighModel;
-use crate::timings::StepTimings;
-use crate::Vec3;
+use super::clock::{percentile, thread_cpu_us};
+use echothigh_model::{ConfigError, ModelConfig, NoExtraForce, StepTimings, ThighModel, Vec3};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -235,35 +231,4 @@ pub fn run_case(
         converged_fraction: converged as f64 / n,
         stage_median_s: stage_medians(&stages),
     })
-}
-
-/// Nearest-rank percentile of sorted samples (0 if empty).
-pub fn percentile(sorted: &[f64], q: f64) -> f64 {
-    if sorted.is_empty() {
-        return 0.0;
-    }
-    let rank = ((q * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
-    sorted[rank - 1]
-}
-
-/// CPU time consumed by the calling thread (µs), 0 where unavailable.
-#[cfg(target_os = "linux")]
-pub fn thread_cpu_us() -> f64 {
-    let mut ts = libc::timespec {
-        tv_sec: 0,
-        tv_nsec: 0,
-    };
-    // SAFETY: `ts` is a valid, writable timespec; the clock id is a constant.
-    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
-    if rc == 0 {
-        ts.tv_sec as f64 * 1e6 + ts.tv_nsec as f64 * 1e-3
-    } else {
-        0.0
-    }
-}
-
-/// CPU time consumed by the calling thread (µs), 0 where unavailable.
-#[cfg(not(target_os = "linux"))]
-pub fn thread_cpu_us() -> f64 {
-    0.0
 }
