@@ -92,5 +92,5 @@ fn a_mode_change_keeps_the_pressed_probe_and_a_reset_does_not() {
         s.status.device != [0.0; 3] && (depth(&scenario, s) - held).abs() > 1e-3
     });
     assert!((depth(&scenario, &reset) - target).abs() < 1e-3);
-    system.shutdown();
+    system.shutdown().unwrap();
 }

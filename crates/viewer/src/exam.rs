@@ -5,7 +5,7 @@
 //! server, and is revealed to the page once the question is answered.
 
 use super::protocol::{ExamResult, ExamStatus};
-use echothigh_runtime::live::VeinKind;
+use echothigh_runtime::live::VeinState;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -22,13 +22,13 @@ pub enum ExamError {
 pub struct ExamSession {
     rng: ChaCha8Rng,
     /// The hidden vein state of the open question.
-    hidden: Option<VeinKind>,
+    hidden: Option<VeinState>,
     status: ExamStatus,
 }
 
 /// Whether `vein` collapses under the probe: only a healthy vein does.
-pub fn is_compressible(vein: VeinKind) -> bool {
-    vein == VeinKind::Healthy
+pub fn is_compressible(vein: VeinState) -> bool {
+    vein == VeinState::Healthy
 }
 
 impl ExamSession {
@@ -49,11 +49,11 @@ impl ExamSession {
     /// Opens a question: draws a vein state uniformly among the three and
     /// returns it, for the caller to hand to the runtime. An open question
     /// is dropped unscored.
-    pub fn start(&mut self) -> VeinKind {
+    pub fn start(&mut self) -> VeinState {
         let vein = match self.rng.gen_range(0..3) {
-            0 => VeinKind::Healthy,
-            1 => VeinKind::Acute,
-            _ => VeinKind::Chronic,
+            0 => VeinState::Healthy,
+            1 => VeinState::Acute,
+            _ => VeinState::Chronic,
         };
         self.hidden = Some(vein);
         self.status.open = true;
@@ -132,7 +132,7 @@ mod tests {
             let answer = i % 2 == 0;
             let r = s.answer(answer).unwrap();
             assert_eq!(r.truth, truth);
-            assert_eq!(r.correct, answer == (truth == VeinKind::Healthy));
+            assert_eq!(r.correct, answer == (truth == VeinState::Healthy));
             expected_correct += u32::from(r.correct);
         }
         let st = s.status();

@@ -31,6 +31,9 @@ pub struct ServerConfig {
     /// Accept any `Host` (the server was bound to a non-loopback address on
     /// purpose, `--allow-remote`); otherwise only loopback host names.
     pub allow_remote: bool,
+    /// A connection (HTTP or WebSocket) from which nothing was read for this
+    /// long is closed ([`super::idle`]); pages are pinged every third of it.
+    pub idle_timeout: Duration,
 }
 
 impl Default for ServerConfig {
@@ -38,6 +41,7 @@ impl Default for ServerConfig {
         Self {
             state_rate: 40.0,
             allow_remote: false,
+            idle_timeout: super::idle::DEFAULT_IDLE_TIMEOUT,
         }
     }
 }
@@ -72,14 +76,15 @@ impl AppState {
             }
             ClientMessage::Live(cmd) => self.control.command(cmd),
             ClientMessage::Viewer(ViewerCommand::ExamStart) => {
-                let mut exam = self.exam();
-                let vein = exam.start();
+                // The exam lock is not held across the restart: the other
+                // connections' pushes read the exam status meanwhile.
+                let vein = self.exam().start();
                 let applied = self
                     .control
                     .command(LiveCommand::SetVein { vein })
                     .and_then(|()| self.control.command(LiveCommand::Reset));
                 if let Err(e) = applied {
-                    exam.stop();
+                    self.exam().stop();
                     return Err(format!("could not start the exam question: {e}"));
                 }
                 Ok(())
@@ -218,8 +223,42 @@ fn json(body: ServerMessage) -> Message {
     Message::Text(Utf8Bytes::from(text))
 }
 
+/// A page looking at the live state, from its connection to its close
+/// ([`LiveControl::page_opened`]).
+struct PageWatch(Arc<AppState>);
+
+impl PageWatch {
+    fn new(app: Arc<AppState>) -> Self {
+        app.control.page_opened();
+        Self(app)
+    }
+}
+
+impl Drop for PageWatch {
+    fn drop(&mut self) {
+        self.0.control.page_closed();
+    }
+}
+
+/// Decodes and applies a page message off the async executor: a command may
+/// restart the simulation's threads (stopping and joining them), which must
+/// not stall the other connections (issue 16).
+async fn handle_text(app: &Arc<AppState>, text: &str) -> Vec<Message> {
+    let decoded = decode_client(text, &app.control.limits());
+    let app = app.clone();
+    tokio::task::spawn_blocking(move || reply(&app, decoded))
+        .await
+        .unwrap_or_else(|e| {
+            tracing::error!("a page command failed: {e}");
+            vec![json(ServerMessage::Error {
+                message: format!("the command failed inside the server: {e}"),
+            })]
+        })
+}
+
 /// One connection: hello, then state pushes and commands until it closes.
 async fn session(mut socket: WebSocket, app: Arc<AppState>) {
+    let _watch = PageWatch::new(app.clone());
     let hello = ServerMessage::Hello {
         mesh: app.control.mesh(),
         state_rate: app.config.state_rate,
@@ -233,17 +272,20 @@ async fn session(mut socket: WebSocket, app: Arc<AppState>) {
     let mut snap = LiveSnapshot::default();
     let mut pixels = Vec::new();
     let mut last_frame = None;
+    let mut ping = tokio::time::interval(app.config.idle_timeout / 3);
+    ping.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     loop {
         let outgoing: Vec<Message> = tokio::select! {
             incoming = socket.recv() => match incoming {
                 None | Some(Err(_)) | Some(Ok(Message::Close(_))) => break,
-                Some(Ok(Message::Text(text))) => reply(&app, decode_client(text.as_str())),
+                Some(Ok(Message::Text(text))) => handle_text(&app, text.as_str()).await,
                 Some(Ok(Message::Binary(_))) => {
                     reply(&app, Err(super::protocol::ProtocolError::Binary))
                 }
                 Some(Ok(Message::Ping(_) | Message::Pong(_))) => Vec::new(),
             },
             _ = tick.tick() => push(&app, &mut snap, &mut pixels, &mut last_frame),
+            _ = ping.tick() => vec![Message::Ping(Default::default())],
         };
         for m in outgoing {
             if socket.send(m).await.is_err() {

@@ -61,13 +61,21 @@ impl Session {
     /// panicked held is lost: the next session starts that part from rest).
     pub fn stop(self) -> Carried {
         self.stop.store(true, Ordering::Relaxed);
+        let panicked = |name: &str| tracing::error!("the live {name} thread panicked");
         for h in self.others {
-            let _ = h.join();
+            if h.join().is_err() {
+                panicked("link");
+            }
         }
-        let threaded = self.physics.and_then(|h| h.join().ok());
+        let threaded = self
+            .physics
+            .and_then(|h| h.join().map_err(|_| panicked("physics")).ok());
         let (direct, device) = match self.haptic.join() {
             Ok((p, d)) => (p, Some(d)),
-            Err(_) => (None, None),
+            Err(_) => {
+                panicked("haptic");
+                (None, None)
+            }
         };
         Carried {
             physics: threaded.or(direct),
@@ -137,7 +145,7 @@ pub(super) fn start_session(
     };
     if !direct {
         let mut physics = physics_for(scenario)?;
-        let (st, rate) = (stop.clone(), c.physics_rate);
+        let (st, rate, sh) = (stop.clone(), c.physics_rate, shared.clone());
         let mut physics_end: InProcessEndpoint = physics_end;
         physics_thread = Some(
             std::thread::Builder::new()
@@ -155,23 +163,32 @@ pub(super) fn start_session(
                         &mut |ph, probe| publisher.publish(ph, probe, clock.now()),
                     );
                     if let Err(e) = r {
-                        tracing::error!("physics thread stopped: {e:#}");
+                        sh.report_fault("physics", &e);
                     }
                     physics
                 })
                 .context("starting the physics thread")?,
         );
-        let st = stop.clone();
+        let (st, sh) = (stop.clone(), shared.clone());
         others.push(
             std::thread::Builder::new()
                 .name("link".into())
-                .spawn(move || link_thread(haptic_end, sink, pos_out, clock, &st))
+                .spawn(move || {
+                    if let Err(e) = link_thread(haptic_end, sink, pos_out, clock, &st) {
+                        // Without the link the haptic side renders a stale
+                        // model: stop the whole session (the loop releases
+                        // the device) and tell the page.
+                        sh.report_fault("link", &e);
+                        st.store(true, Ordering::Relaxed);
+                    }
+                })
                 .context("starting the link thread")?,
         );
         publisher = Publisher::new(shared.clone(), scenario);
     }
-    let (st, scale, loop_cfg) = (
+    let (st, sh, scale, loop_cfg) = (
         stop.clone(),
+        shared.clone(),
         scenario.device.force_scale(),
         scenario.haptics.runner.clone(),
     );
@@ -204,7 +221,7 @@ pub(super) fn start_session(
                     tick.set_orientation(tgt.orientation);
                 }
                 if let Err(e) = tick.tick(now, &mut observer) {
-                    tracing::error!("live haptic loop stopped: {e:#}");
+                    sh.report_fault("haptic", &e);
                     st.store(true, Ordering::Relaxed);
                 }
             });
@@ -282,32 +299,32 @@ impl TickObserver for LiveObserver {
     }
 }
 
-/// The link thread of the live system: device pose out, samples in.
+/// The link thread of the live system: device pose out, samples in, until
+/// `stop`; a link error ends it and is returned.
 fn link_thread(
     mut link: InProcessEndpoint,
     mut sink: SampleSink,
     mut pos: triple_buffer::Output<(f64, ProbeMsg, bool)>,
     clock: Clock,
     stop: &AtomicBool,
-) {
+) -> Result<()> {
     let sleeper = spin_sleep::SpinSleeper::default();
     let mut last_sent = -1.0;
     while !stop.load(Ordering::Relaxed) {
         let now = clock.now();
         let (t, probe, valid) = *pos.read();
         if valid && t > last_sent {
-            if let Err(e) = link.send(Message::Probe(probe), now) {
-                tracing::error!("live link: {e}");
-                return;
-            }
+            link.send(Message::Probe(probe), now)
+                .context("sending the probe pose")?;
             last_sent = t;
         }
-        let _ = link.poll(now);
-        while let Ok(Some(m)) = link.recv(now) {
+        link.poll(now).context("polling the link")?;
+        while let Some(m) = link.recv(now).context("receiving a sample")? {
             if let Message::Sample(s) = m {
                 sink.on_sample(&s, now);
             }
         }
         sleeper.sleep(Duration::from_micros(500));
     }
+    Ok(())
 }
