@@ -328,3 +328,34 @@ fn link_thread(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 16: a link error ends the link thread with the error (it used
+    /// to be logged and dropped, or ignored for `poll`/`recv`), which the
+    /// thread's wrapper then reports to the page and turns into a stop.
+    #[test]
+    fn a_link_error_ends_the_link_thread_with_the_error() {
+        let scenario = Scenario::default();
+        let (sink, _source) = haptic_side_for(CouplingMode::Buffer, &scenario).unwrap();
+        let (mut haptic_end, _physics_end) = scenario.in_process_link();
+        haptic_end.close(0.0).unwrap();
+        let (mut pos_in, pos_out) =
+            triple_buffer::triple_buffer(&(0.0, ProbeMsg::default(), false));
+        pos_in.write((1.0, ProbeMsg::default(), true));
+        let stop = AtomicBool::new(false);
+        let err = link_thread(haptic_end, sink, pos_out, Clock::start(), &stop).unwrap_err();
+        assert!(
+            format!("{err:#}").contains("sending the probe pose"),
+            "{err:#}"
+        );
+        // Stopped before any error: a clean end.
+        let (sink, _source) = haptic_side_for(CouplingMode::Buffer, &scenario).unwrap();
+        let (haptic_end, _physics_end) = scenario.in_process_link();
+        let (_pos_in, pos_out) = triple_buffer::triple_buffer(&(0.0, ProbeMsg::default(), false));
+        stop.store(true, Ordering::Relaxed);
+        link_thread(haptic_end, sink, pos_out, Clock::start(), &stop).unwrap();
+    }
+}
