@@ -297,6 +297,20 @@ impl LiveCommand {
     }
 }
 
+/// What [`LiveControl::image`] copied.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ImageInfo {
+    /// Columns (lateral pixels).
+    pub width: u32,
+    /// Rows (axial pixels).
+    pub height: u32,
+    /// Frames rendered so far (0: none yet).
+    pub frame: u64,
+    /// Simulated time of the physics state the frame shows (s, the clock of
+    /// [`LiveStatus::time`]).
+    pub time: f64,
+}
+
 /// What the runtime offers a live front end.
 pub trait LiveControl: Send + Sync {
     /// The mesh topology (static).
@@ -304,9 +318,10 @@ pub trait LiveControl: Send + Sync {
     /// Copies the latest state into `out`.
     fn snapshot(&self, out: &mut LiveSnapshot);
     /// Copies the latest echographic frame (8-bit grayscale, row-major,
-    /// `width × height`, axial rows) into `out`; returns its size and a frame
-    /// counter that increases with every new frame.
-    fn image(&self, out: &mut Vec<u8>) -> (u32, u32, u64);
+    /// `width × height`, axial rows) into `out`; returns its size, a frame
+    /// counter that increases with every new frame, and the time of the
+    /// physics state it shows.
+    fn image(&self, out: &mut Vec<u8>) -> ImageInfo;
     /// Current vein state.
     fn vein(&self) -> VeinState;
     /// The ranges its commands must respect ([`LiveCommand::validate`]).

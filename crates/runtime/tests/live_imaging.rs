@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 fn frame(system: &LiveSystem) -> u64 {
     let mut pixels = Vec::new();
-    system.image(&mut pixels).2
+    system.image(&mut pixels).frame
 }
 
 fn wait_until(what: &str, mut done: impl FnMut() -> bool) {

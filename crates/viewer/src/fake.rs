@@ -4,8 +4,8 @@
 //! `x/(ax + b)`), so the server's tests see forces that rise with the press.
 
 use echothigh_runtime::live::{
-    CommandLimits, CouplingMode, LiveCommand, LiveControl, LiveMesh, LiveSnapshot, LiveStatus,
-    VeinState,
+    CommandLimits, CouplingMode, ImageInfo, LiveCommand, LiveControl, LiveMesh, LiveSnapshot,
+    LiveStatus, VeinState,
 };
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{mpsc, Mutex};
@@ -162,12 +162,18 @@ impl LiveControl for FakeLive {
         };
     }
 
-    fn image(&self, out: &mut Vec<u8>) -> (u32, u32, u64) {
+    fn image(&self, out: &mut Vec<u8>) -> ImageInfo {
         let mut i = self.inner.lock().unwrap();
         i.frame += 1;
+        let f = i.frame as u32;
         out.clear();
-        out.extend((0..IMAGE.0 * IMAGE.1).map(|k| (k % 251) as u8));
-        (IMAGE.0, IMAGE.1, i.frame)
+        out.extend((0..IMAGE.0 * IMAGE.1).map(|k| ((k + f) % 251) as u8));
+        ImageInfo {
+            width: IMAGE.0,
+            height: IMAGE.1,
+            frame: i.frame,
+            time: 0.01 * i.frame as f64,
+        }
     }
 
     fn page_opened(&self) {

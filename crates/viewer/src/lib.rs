@@ -11,6 +11,7 @@ mod assets;
 mod exam;
 #[cfg(test)]
 mod fake;
+mod frames;
 mod idle;
 pub mod protocol;
 mod server;

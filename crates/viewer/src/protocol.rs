@@ -86,6 +86,9 @@ pub struct ViewState {
     pub vein: Option<VeinState>,
     /// Exam session.
     pub exam: ExamStatus,
+    /// Number of this state on its connection (1, 2, …): the page
+    /// acknowledges it ([`ViewerCommand::Ack`]) once drawn.
+    pub seq: u64,
     /// A thread of the simulation stopped, in plain words (`None`: all run).
     pub fault: Option<String>,
 }
@@ -99,6 +102,7 @@ impl ViewState {
             status: snap.status.sanitized(),
             vein,
             exam,
+            seq: 0,
             fault: snap.fault.clone(),
         }
     }
@@ -150,7 +154,17 @@ pub enum ViewerCommand {
     },
     /// Leave exam mode (an open question is dropped unscored).
     ExamStop,
+    /// The page has drawn the state numbered `seq` (flow control: the
+    /// server sends a new state only when at most [`CREDIT`] − 1 are unacknowledged).
+    Ack {
+        /// [`ViewState::seq`] of the drawn state.
+        seq: u64,
+    },
 }
+
+/// States a connection may have unacknowledged: one being drawn by the page,
+/// one on its way. More would queue stale frames (the lag of issue 19).
+pub const CREDIT: u64 = 2;
 
 /// A decoded, validated page message.
 #[derive(Debug, Clone, PartialEq)]
@@ -206,7 +220,7 @@ pub fn decode_client(text: &str, limits: &CommandLimits) -> Result<ClientMessage
         kind: kind.clone(),
         reason: e.to_string(),
     };
-    let (msg, known) = if kind.starts_with("exam_") {
+    let (msg, known) = if kind.starts_with("exam_") || kind == "ack" {
         let cmd: ViewerCommand = serde_json::from_value(value.clone()).map_err(invalid)?;
         (ClientMessage::Viewer(cmd), serde_json::to_value(cmd))
     } else {
@@ -241,6 +255,15 @@ pub enum FrameKind {
     /// Deformed surface: `a` = node count, `b` = 0, then `3a` f32 positions
     /// (m) and `a` f32 compressions (fraction of the asymptote, 0..1).
     Surface = 2,
+    /// Echographic image as a PNG: `a` = width, `b` = height, then the f64
+    /// simulated time (s) of the state it shows, then an 8-bit gray PNG.
+    ImagePng = 3,
+    /// The change of the image since the connection's previous image frame:
+    /// as [`FrameKind::ImagePng`], the PNG holding `new − old` modulo 256.
+    ImageDelta = 4,
+    /// The surface nodes that moved: `a` = their count, `b` = all nodes,
+    /// then `a` u32 indices, `3a` f32 positions (m), `a` f32 compressions.
+    SurfaceDelta = 5,
 }
 
 /// Magic bytes opening every binary frame.
@@ -282,16 +305,21 @@ impl FrameHeader {
         let kind = match head[5] {
             1 => FrameKind::Image,
             2 => FrameKind::Surface,
+            3 => FrameKind::ImagePng,
+            4 => FrameKind::ImageDelta,
+            5 => FrameKind::SurfaceDelta,
             _ => return None,
         };
         let a = u32::from_le_bytes(head[8..12].try_into().ok()?);
         let b = u32::from_le_bytes(head[12..16].try_into().ok()?);
         let payload = &frame[FRAME_HEADER_LEN..];
-        let expected = match kind {
-            FrameKind::Image => a as usize * b as usize,
-            FrameKind::Surface => a as usize * 16,
+        let fits = match kind {
+            FrameKind::Image => payload.len() == a as usize * b as usize,
+            FrameKind::Surface => payload.len() == a as usize * 16,
+            FrameKind::ImagePng | FrameKind::ImageDelta => payload.len() > 8,
+            FrameKind::SurfaceDelta => payload.len() == a as usize * 20 && a <= b,
         };
-        (payload.len() == expected).then_some((FrameHeader { kind, a, b }, payload))
+        fits.then_some((FrameHeader { kind, a, b }, payload))
     }
 }
 

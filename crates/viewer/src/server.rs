@@ -1,17 +1,20 @@
 //! The viewer's web server: the embedded page and the `/ws` WebSocket.
 //!
 //! One task per connection pushes the live state at [`ServerConfig::state_rate`]
-//! (JSON scalars, the deformed surface and — when a new one exists — the
-//! echographic image as binary frames, see [`super::protocol`]) and applies
-//! the page's commands. The exam session is shared by all connections and
+//! (JSON scalars, the surface nodes that moved and — when a new one exists —
+//! the echographic image as a PNG or a PNG of its change, see
+//! [`super::frames`]), with flow control: a new state only when the page has
+//! acknowledged all but [`CREDIT`] − 1 of those sent, within a byte budget
+//! ([`super::frames::BYTES_PER_SECOND`]), always the latest (never a
+//! backlog). Commands run off the async executor. The exam session is shared by all connections and
 //! lives only here, so the hidden vein state never reaches the page before it
 //! is answered.
 
 use super::assets;
 use super::exam::ExamSession;
+use super::frames::{ByteBudget, WireState, BURST_BYTES, BYTES_PER_SECOND};
 use super::protocol::{
-    decode_client, encode_image, encode_surface, ClientMessage, Envelope, ServerMessage, ViewState,
-    ViewerCommand,
+    decode_client, ClientMessage, Envelope, ServerMessage, ViewState, ViewerCommand, CREDIT,
 };
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::extract::State;
@@ -96,6 +99,8 @@ impl AppState {
                 self.exam().stop();
                 Ok(())
             }
+            // Flow control, handled by the connection itself.
+            ClientMessage::Viewer(ViewerCommand::Ack { .. }) => Ok(()),
         }
     }
 
@@ -240,11 +245,43 @@ impl Drop for PageWatch {
     }
 }
 
-/// Decodes and applies a page message off the async executor: a command may
-/// restart the simulation's threads (stopping and joining them), which must
-/// not stall the other connections (issue 16).
-async fn handle_text(app: &Arc<AppState>, text: &str) -> Vec<Message> {
+/// What one connection knows of its page: states sent and acknowledged,
+/// the frames it holds ([`WireState`]), its byte budget.
+struct Conn {
+    sent: u64,
+    acked: u64,
+    wire: WireState,
+    budget: ByteBudget,
+    epoch: tokio::time::Instant,
+    snap: LiveSnapshot,
+    pixels: Vec<u8>,
+}
+
+impl Conn {
+    fn new() -> Self {
+        Self {
+            sent: 0,
+            acked: 0,
+            wire: WireState::default(),
+            budget: ByteBudget::new(BYTES_PER_SECOND, BURST_BYTES, 0.0),
+            epoch: tokio::time::Instant::now(),
+            snap: LiveSnapshot::default(),
+            pixels: Vec::new(),
+        }
+    }
+}
+
+/// Handles a page message: an acknowledgement at once, anything else off
+/// the async executor, since a command may restart the simulation's threads
+/// (stopping and joining them), which must not stall the other connections
+/// (issue 16).
+async fn handle_text(app: &Arc<AppState>, conn: &mut Conn, text: &str) -> Vec<Message> {
     let decoded = decode_client(text, &app.control.limits());
+    if let Ok(ClientMessage::Viewer(ViewerCommand::Ack { seq })) = decoded {
+        // Only what was sent can be acknowledged.
+        conn.acked = conn.acked.max(seq.min(conn.sent));
+        return Vec::new();
+    }
     let app = app.clone();
     tokio::task::spawn_blocking(move || reply(&app, decoded))
         .await
@@ -269,22 +306,20 @@ async fn session(mut socket: WebSocket, app: Arc<AppState>) {
     let period = Duration::from_secs_f64(1.0 / app.config.state_rate.clamp(1.0, 120.0));
     let mut tick = tokio::time::interval(period);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
-    let mut snap = LiveSnapshot::default();
-    let mut pixels = Vec::new();
-    let mut last_frame = None;
     let mut ping = tokio::time::interval(app.config.idle_timeout / 3);
     ping.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    let mut conn = Conn::new();
     loop {
         let outgoing: Vec<Message> = tokio::select! {
             incoming = socket.recv() => match incoming {
                 None | Some(Err(_)) | Some(Ok(Message::Close(_))) => break,
-                Some(Ok(Message::Text(text))) => handle_text(&app, text.as_str()).await,
+                Some(Ok(Message::Text(text))) => handle_text(&app, &mut conn, text.as_str()).await,
                 Some(Ok(Message::Binary(_))) => {
                     reply(&app, Err(super::protocol::ProtocolError::Binary))
                 }
                 Some(Ok(Message::Ping(_) | Message::Pong(_))) => Vec::new(),
             },
-            _ = tick.tick() => push(&app, &mut snap, &mut pixels, &mut last_frame),
+            _ = tick.tick() => push(&app, &mut conn),
             _ = ping.tick() => vec![Message::Ping(Default::default())],
         };
         for m in outgoing {
@@ -312,24 +347,34 @@ fn reply(
     }
 }
 
-/// The messages of one state push: scalars, surface and a new image if any.
-fn push(
-    app: &AppState,
-    snap: &mut LiveSnapshot,
-    pixels: &mut Vec<u8>,
-    last_frame: &mut Option<u64>,
-) -> Vec<Message> {
-    app.control.snapshot(snap);
-    let mut out = vec![json(ServerMessage::State(app.view_state(snap)))];
-    let mut surface = Vec::new();
-    encode_surface(snap, &mut surface);
-    out.push(Message::Binary(surface.into()));
-    let (w, h, frame) = app.control.image(pixels);
-    if *last_frame != Some(frame) && w > 0 && h > 0 {
-        *last_frame = Some(frame);
-        let mut image = Vec::new();
-        encode_image(w, h, pixels, &mut image);
-        out.push(Message::Binary(image.into()));
+/// The messages of one state push, latest wins: nothing while [`CREDIT`]
+/// states are unacknowledged or the byte budget is spent; else the state,
+/// then the surface nodes that moved and the new image while the budget
+/// lasts.
+fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
+    conn.budget.refill(conn.epoch.elapsed().as_secs_f64());
+    if conn.sent - conn.acked >= CREDIT || !conn.budget.allows() {
+        return Vec::new();
+    }
+    app.control.snapshot(&mut conn.snap);
+    conn.sent += 1;
+    let mut state = app.view_state(&conn.snap);
+    state.seq = conn.sent;
+    let state = json(ServerMessage::State(state));
+    conn.budget.spend(state.to_text().map_or(0, str::len));
+    let mut out = vec![state];
+    if conn.budget.allows() {
+        if let Some(surface) = conn.wire.surface(&conn.snap) {
+            conn.budget.spend(surface.len());
+            out.push(Message::Binary(surface.into()));
+        }
+    }
+    if conn.budget.allows() {
+        let info = app.control.image(&mut conn.pixels);
+        if let Some(image) = conn.wire.image(info, &conn.pixels) {
+            conn.budget.spend(image.len());
+            out.push(Message::Binary(image.into()));
+        }
     }
     out
 }

@@ -17,7 +17,8 @@ mod session;
 mod shared;
 
 use crate::live::{
-    CommandLimits, CouplingMode, LiveCommand, LiveControl, LiveMesh, LiveSnapshot, VeinState,
+    CommandLimits, CouplingMode, ImageInfo, LiveCommand, LiveControl, LiveMesh, LiveSnapshot,
+    VeinState,
 };
 use crate::physics_side::PhysicsSide;
 use crate::scenario::Scenario;
@@ -146,6 +147,7 @@ impl LiveSystem {
                 width: img.columns as u32,
                 height: img.rows as u32,
                 frame: 0,
+                time: 0.0,
             }),
             vein: AtomicU8::new(vein_code(scenario.patient.vein)),
             haptic: Mutex::new(None),
@@ -270,13 +272,18 @@ impl LiveControl for LiveSystem {
         }
     }
 
-    fn image(&self, out: &mut Vec<u8>) -> (u32, u32, u64) {
+    fn image(&self, out: &mut Vec<u8>) -> ImageInfo {
         match self.shared.image.lock() {
             Ok(s) => {
                 out.clone_from(&s.pixels);
-                (s.width, s.height, s.frame)
+                ImageInfo {
+                    width: s.width,
+                    height: s.height,
+                    frame: s.frame,
+                    time: s.time,
+                }
             }
-            Err(_) => (0, 0, 0),
+            Err(_) => ImageInfo::default(),
         }
     }
 

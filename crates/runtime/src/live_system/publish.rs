@@ -203,6 +203,7 @@ fn imaging_loop(shared: &Shared, cfg: &ImagingConfig, stop: &AtomicBool) -> Resu
                 .map_err(|_| anyhow::anyhow!("imaging: the image slot is poisoned"))?;
             slot.pixels.copy_from_slice(&pixels);
             slot.frame += 1;
+            slot.time = time;
         }
         next += period;
         let now = Instant::now();

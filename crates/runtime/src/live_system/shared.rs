@@ -56,6 +56,8 @@ pub(super) struct ImageSlot {
     pub height: u32,
     /// Frames rendered so far.
     pub frame: u64,
+    /// Simulated time of the physics state the frame shows (s).
+    pub time: f64,
 }
 
 /// What the threads share (the real-time side only `try_lock`s).

@@ -42,13 +42,30 @@ async fn connect(addr: std::net::SocketAddr) -> Client {
     ws
 }
 
-/// Next message of the connection (fails the test after 5 s).
-async fn next(ws: &mut Client) -> Message {
+/// Next message of the connection (fails the test after 5 s), without
+/// acknowledging it.
+async fn next_raw(ws: &mut Client) -> Message {
     tokio::time::timeout(Duration::from_secs(5), ws.next())
         .await
         .expect("no message within 5 s")
         .expect("connection closed")
         .expect("socket error")
+}
+
+/// Next message of the connection; a state is acknowledged at once, as a
+/// page that keeps up does (flow control).
+async fn next(ws: &mut Client) -> Message {
+    let m = next_raw(ws).await;
+    if let Message::Text(t) = &m {
+        if let Ok(Envelope {
+            body: ServerMessage::State(s),
+            ..
+        }) = serde_json::from_str::<Envelope>(t.as_str())
+        {
+            send(ws, &format!(r#"{{"type":"ack","seq":{}}}"#, s.seq)).await;
+        }
+    }
+    m
 }
 
 /// Next JSON message satisfying `pred`, skipping others.
@@ -103,28 +120,49 @@ async fn hello_then_state_surface_and_image_frames() {
         }
         other => panic!("first message {other:?}"),
     }
-    let (mut surface, mut image) = (false, false);
-    for _ in 0..50 {
+    // The first surface frame holds every node; the first image is a PNG
+    // key frame, the next ones PNG deltas that rebuild the double's frames
+    // exactly (its pixel k of frame f is (k + f) mod 251).
+    let (mut surface, mut deltas) = (false, 0);
+    let mut page_image: Option<Vec<u8>> = None;
+    for _ in 0..200 {
         if let Message::Binary(b) = next(&mut ws).await {
             let (h, body) = FrameHeader::parse(&b).expect("bad frame");
             match h.kind {
-                FrameKind::Surface => {
-                    assert_eq!(h.a as usize, nodes);
-                    assert_eq!(body.len(), nodes * 16);
+                FrameKind::SurfaceDelta if !surface => {
+                    assert_eq!((h.a as usize, h.b as usize), (nodes, nodes));
                     surface = true;
                 }
-                FrameKind::Image => {
+                FrameKind::SurfaceDelta => assert!(h.a <= h.b),
+                FrameKind::ImagePng => {
                     assert_eq!((h.a, h.b), (32, 24));
-                    assert!(body.iter().any(|&p| p > 0));
-                    image = true;
+                    assert!(page_image.is_none(), "a second key frame");
+                    page_image = Some(decode_png(&body[8..]));
+                }
+                FrameKind::ImageDelta => {
+                    let img = page_image.as_mut().expect("a delta before a key frame");
+                    for (p, d) in img.iter_mut().zip(decode_png(&body[8..])) {
+                        *p = p.wrapping_add(d);
+                    }
+                    deltas += 1;
+                }
+                other => panic!("the server sent a {other:?} frame"),
+            }
+            if let Some(img) = &page_image {
+                let f = u32::from(img[0]);
+                for (k, &p) in img.iter().enumerate() {
+                    assert_eq!(u32::from(p), (k as u32 + f) % 251, "pixel {k}");
                 }
             }
         }
-        if surface && image {
+        if surface && deltas >= 3 {
             break;
         }
     }
-    assert!(surface && image, "surface {surface} image {image}");
+    assert!(
+        surface && deltas >= 3,
+        "surface {surface}, {deltas} image deltas"
+    );
     let s = next_state(&mut ws, |_| true).await;
     assert_eq!(s.vein, Some(VeinState::Healthy));
     assert!(!s.exam.open);
@@ -457,4 +495,49 @@ async fn wait_watchers(fake: &FakeLive, n: usize) {
         );
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
+}
+
+/// An 8-bit grayscale PNG's pixels.
+fn decode_png(png_bytes: &[u8]) -> Vec<u8> {
+    let mut reader = png::Decoder::new(png_bytes).read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Grayscale);
+    buf.truncate(info.buffer_size());
+    buf
+}
+
+/// Flow control (issue 19): a page that does not acknowledge gets
+/// `CREDIT` states and then nothing, though the server ticks at 100 Hz
+/// (0.5 s is fifty ticks); one acknowledgement frees one more, the newest.
+#[tokio::test]
+async fn an_unacknowledged_page_gets_no_backlog() {
+    use super::super::protocol::CREDIT;
+    let fake = Arc::new(FakeLive::new());
+    let mut ws = connect(start(fake).await).await;
+    let mut states = Vec::new();
+    let deadline = tokio::time::Instant::now() + Duration::from_millis(500);
+    while let Ok(Some(Ok(m))) = tokio::time::timeout_at(deadline, ws.next()).await {
+        if let Message::Text(t) = m {
+            if let ServerMessage::State(s) =
+                serde_json::from_str::<Envelope>(t.as_str()).unwrap().body
+            {
+                states.push(s);
+            }
+        }
+    }
+    assert_eq!(
+        states.len() as u64,
+        CREDIT,
+        "states sent without acknowledgement"
+    );
+    assert_eq!(states.iter().map(|s| s.seq).collect::<Vec<_>>(), vec![1, 2]);
+    // An acknowledgement of a state never sent frees nothing beyond.
+    send(&mut ws, r#"{"type":"ack","seq":99}"#).await;
+    let third = next_state(&mut ws, |_| true).await;
+    assert_eq!(third.seq, 3);
+    assert!(
+        third.status.time > states[1].status.time,
+        "not the newest state"
+    );
 }
