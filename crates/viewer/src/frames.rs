@@ -47,6 +47,11 @@ fn finite(x: f32) -> f32 {
     }
 }
 
+/// `|d| ≤ eps`; false for NaN (a node never sent always differs).
+fn within(d: f32, eps: f32) -> bool {
+    d.abs() <= eps
+}
+
 impl WireState {
     /// The surface delta of `snap` against what was sent, or `None` when no
     /// node changed beyond the thresholds. The frame: header (`a` = changed
@@ -65,8 +70,8 @@ impl WireState {
             let p = snap.positions[i].map(finite);
             let c = finite(snap.compression[i]);
             let q = self.positions[i];
-            let moved = (0..3).any(|k| !((p[k] - q[k]).abs() <= POS_EPS));
-            if moved || !((c - self.compression[i]).abs() <= COMP_EPS) {
+            let moved = (0..3).any(|k| !within(p[k] - q[k], POS_EPS));
+            if moved || !within(c - self.compression[i], COMP_EPS) {
                 self.positions[i] = p;
                 self.compression[i] = c;
                 self.changed.push(i as u32);
@@ -268,11 +273,8 @@ mod tests {
                 apply_surface(&frame, &mut pos, &mut comp);
             }
             for i in 0..n {
-                for k in 0..3 {
-                    assert!(
-                        (pos[i][k] - snap.positions[i][k]).abs() <= POS_EPS,
-                        "step {step}"
-                    );
+                for (p, t) in pos[i].iter().zip(snap.positions[i]) {
+                    assert!((p - t).abs() <= POS_EPS, "step {step}");
                 }
                 assert!(
                     (comp[i] - snap.compression[i]).abs() <= COMP_EPS,
