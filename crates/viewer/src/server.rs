@@ -77,6 +77,11 @@ impl AppState {
             ClientMessage::Live(LiveCommand::SetVein { .. }) if self.exam().is_open() => {
                 Err("the vein state is hidden during an exam question: answer it or leave the exam first".into())
             }
+            ClientMessage::Live(cmd @ LiveCommand::Probe { .. }) => {
+                self.control.command(cmd)?;
+                self.exam().trainee_pressed();
+                Ok(())
+            }
             ClientMessage::Live(cmd) => self.control.command(cmd),
             ClientMessage::Viewer(ViewerCommand::ExamStart) => {
                 // The exam lock is not held across the restart: the other

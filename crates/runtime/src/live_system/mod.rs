@@ -36,7 +36,15 @@ struct Inner {
     session: Option<Session>,
     exam: bool,
     target: HandTarget,
+    /// Where the page last placed the probe: (theta, z, tilt) (rad, m, rad).
+    placement: (f64, f64, f64),
 }
+
+/// Height of the lifted probe above the rest skin (m, a negative depth): a
+/// reset or a new question starts with the probe off the thigh, so the
+/// force starts at zero and rises only as the trainee presses again (issue
+/// 19: restarting pressed in gave 13–46 N spikes).
+pub const LIFTED_DEPTH: f64 = -0.02;
 
 /// What a restart keeps of the stopped session's state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -154,13 +162,14 @@ impl LiveSystem {
             watchers: AtomicUsize::new(0),
             fault: Mutex::new(None),
         });
-        let target = target_on_surface(&scenario, 0.0, 0.0, -0.02, 0.0);
+        let target = target_on_surface(&scenario, 0.0, 0.0, LIFTED_DEPTH, 0.0);
         let imaging = ImagingThread::spawn(shared.clone(), &scenario)?;
         let inner = Inner {
             scenario,
             session: None,
             exam: false,
             target,
+            placement: (0.0, 0.0, 0.0),
         };
         let system = Arc::new(LiveSystem {
             shared,
@@ -342,6 +351,7 @@ impl LiveSystem {
             } => {
                 let t = target_on_surface(&inner.scenario, theta, z, depth, tilt);
                 inner.target = t;
+                inner.placement = (theta, z, tilt);
                 if inner.exam {
                     return Err("the scripted exam is playing: stop it to drive the probe".into());
                 }
@@ -386,6 +396,10 @@ impl LiveSystem {
             }
             LiveCommand::Reset => {
                 inner.exam = false;
+                // Lifted above where it was: the new session starts with
+                // the device at its target, out of contact.
+                let (theta, z, tilt) = inner.placement;
+                inner.target = target_on_surface(&inner.scenario, theta, z, LIFTED_DEPTH, tilt);
                 restart(self, inner, Keep::Nothing)
             }
         }
