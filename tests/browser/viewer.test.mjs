@@ -264,6 +264,47 @@ try {
     `${shown} · score ${exam.correct}/${exam.answered}`);
   await page.screenshot({ path: join(shots, '03-exam.png') });
 
+  // Keyboard only (issue 19): focus the 3D view (no mouse), place the probe
+  // with Enter and press with W until the force rises; no mouse or pointer
+  // event reaches the page meanwhile.
+  await page.evaluate(() => {
+    window.__mouse = 0;
+    for (const t of ['mousedown', 'mouseup', 'mousemove', 'pointerdown', 'pointermove', 'click', 'wheel']) {
+      window.addEventListener(t, () => { window.__mouse += 1; }, true);
+    }
+  });
+  await page.click('#reset');
+  await until(page, () => Math.hypot(...window.echothigh.state.physics_force) < 0.5, null, 'the force to vanish after a reset');
+  await page.evaluate(() => { window.__mouse = 0; });
+  await page.focus('#scene');
+  await page.keyboard.press('ArrowUp');
+  await page.keyboard.press('Enter');
+  for (let i = 0; i < 20; i++) await page.keyboard.press('w');
+  const keyed = await until(page, () => {
+    const f = Math.hypot(...window.echothigh.state.physics_force);
+    return f > 1.0 ? { f, depth: window.echothigh.probe.depth } : null;
+  }, null, 'the force to rise from the keyboard alone');
+  const mouseEvents = await page.evaluate(() => window.__mouse);
+  check('keyboard only: the probe is placed and pressed with no mouse event', mouseEvents === 0,
+    `|F| ${keyed.f.toFixed(2)} N at ${(keyed.depth * 1000).toFixed(1)} mm, ${mouseEvents} mouse events`);
+  // A shortcut key on a focused control acts on the control, not the probe.
+  const depthBefore = await page.evaluate(() => window.echothigh.probe.depth);
+  await page.focus('#mode');
+  await page.keyboard.press('w');
+  check('shortcuts do not act while a control has focus',
+    (await page.evaluate(() => window.echothigh.probe.depth)) === depthBefore);
+
+  // A second tab observes: it sees the state, its commands are refused.
+  const second = await browser.newPage();
+  await second.goto(url);
+  await until(second, () => window.echothigh.state && window.echothigh.state.observer === true, null, 'the second tab as an observer');
+  await second.evaluate(() => window.echothigh.send({ type: 'probe', theta: 0, z: 0, depth: 0.03, tilt: 0 }));
+  await until(second, () => window.echothigh.errors > 0, null, 'the observer\'s command refused');
+  const refusal = await second.evaluate(() => window.echothigh.lastError);
+  check('a second tab is an observer whose inputs do not move the probe',
+    refusal.includes('observes') && !(await page.evaluate(() => window.echothigh.state.observer)), refusal);
+  await second.close();
+
   // Rates seen by the page over its last 300 events (mean rate; median, p95
   // and max of the intervals), as JSON (a measurement, not a check: headless chromium renders
   // WebGL in software on a shared CPU).

@@ -86,6 +86,9 @@ pub struct ViewState {
     pub vein: Option<VeinState>,
     /// Exam session.
     pub exam: ExamStatus,
+    /// This tab only observes: another one drives the probe and the exam
+    /// (issue 19: two tabs fought over the probe).
+    pub observer: bool,
     /// Number of this state on its connection (1, 2, …): the page
     /// acknowledges it ([`ViewerCommand::Ack`]) once drawn.
     pub seq: u64,
@@ -102,6 +105,7 @@ impl ViewState {
             status: snap.status.sanitized(),
             vein,
             exam,
+            observer: false,
             seq: 0,
             fault: snap.fault.clone(),
         }
@@ -154,6 +158,9 @@ pub enum ViewerCommand {
     },
     /// Leave exam mode (an open question is dropped unscored).
     ExamStop,
+    /// An observer tab asks to drive the probe; granted only when no other
+    /// tab drives it (the driving tab closed).
+    TakeControl,
     /// The page has drawn the state numbered `seq` (flow control: the
     /// server sends a new state only when at most [`CREDIT`] − 1 are unacknowledged).
     Ack {
@@ -220,7 +227,7 @@ pub fn decode_client(text: &str, limits: &CommandLimits) -> Result<ClientMessage
         kind: kind.clone(),
         reason: e.to_string(),
     };
-    let (msg, known) = if kind.starts_with("exam_") || kind == "ack" {
+    let (msg, known) = if kind.starts_with("exam_") || kind == "ack" || kind == "take_control" {
         let cmd: ViewerCommand = serde_json::from_value(value.clone()).map_err(invalid)?;
         (ClientMessage::Viewer(cmd), serde_json::to_value(cmd))
     } else {

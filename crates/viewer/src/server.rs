@@ -54,6 +54,9 @@ pub struct AppState {
     control: Arc<dyn LiveControl>,
     exam: Mutex<ExamSession>,
     config: ServerConfig,
+    /// The connection that drives the probe (the first one; `None` once it
+    /// closed), and the last connection number given.
+    owner: Mutex<(Option<u64>, u64)>,
 }
 
 impl AppState {
@@ -63,6 +66,34 @@ impl AppState {
             control,
             exam: Mutex::new(exam),
             config,
+            owner: Mutex::new((None, 0)),
+        }
+    }
+
+    /// A new connection's number; it drives the probe if nobody does.
+    fn join(&self) -> u64 {
+        let mut o = self.owner.lock().unwrap_or_else(|e| e.into_inner());
+        o.1 += 1;
+        let id = o.1;
+        o.0.get_or_insert(id);
+        id
+    }
+
+    /// Whether connection `id` drives the probe; `claim` makes it the
+    /// driver if nobody is.
+    fn drives(&self, id: u64, claim: bool) -> bool {
+        let mut o = self.owner.lock().unwrap_or_else(|e| e.into_inner());
+        if claim && o.0.is_none() {
+            o.0 = Some(id);
+        }
+        o.0 == Some(id)
+    }
+
+    /// Connection `id` closed: if it drove, nobody drives until a tab asks.
+    fn leave(&self, id: u64) {
+        let mut o = self.owner.lock().unwrap_or_else(|e| e.into_inner());
+        if o.0 == Some(id) {
+            o.0 = None;
         }
     }
 
@@ -104,8 +135,8 @@ impl AppState {
                 self.exam().stop();
                 Ok(())
             }
-            // Flow control, handled by the connection itself.
-            ClientMessage::Viewer(ViewerCommand::Ack { .. }) => Ok(()),
+            // Flow control and ownership, handled by the connection itself.
+            ClientMessage::Viewer(ViewerCommand::Ack { .. } | ViewerCommand::TakeControl) => Ok(()),
         }
     }
 
@@ -234,25 +265,28 @@ fn json(body: ServerMessage) -> Message {
 }
 
 /// A page looking at the live state, from its connection to its close
-/// ([`LiveControl::page_opened`]).
-struct PageWatch(Arc<AppState>);
+/// ([`LiveControl::page_opened`]), with its connection number.
+struct PageWatch(Arc<AppState>, u64);
 
 impl PageWatch {
     fn new(app: Arc<AppState>) -> Self {
         app.control.page_opened();
-        Self(app)
+        let id = app.join();
+        Self(app, id)
     }
 }
 
 impl Drop for PageWatch {
     fn drop(&mut self) {
+        self.0.leave(self.1);
         self.0.control.page_closed();
     }
 }
 
-/// What one connection knows of its page: states sent and acknowledged,
-/// the frames it holds ([`WireState`]), its byte budget.
+/// What one connection knows of its page: its number, states sent and
+/// acknowledged, the frames it holds ([`WireState`]), its byte budget.
 struct Conn {
+    id: u64,
     sent: u64,
     acked: u64,
     wire: WireState,
@@ -263,8 +297,9 @@ struct Conn {
 }
 
 impl Conn {
-    fn new() -> Self {
+    fn new(id: u64) -> Self {
         Self {
+            id,
             sent: 0,
             acked: 0,
             wire: WireState::default(),
@@ -287,6 +322,15 @@ async fn handle_text(app: &Arc<AppState>, conn: &mut Conn, text: &str) -> Vec<Me
         conn.acked = conn.acked.max(seq.min(conn.sent));
         return Vec::new();
     }
+    let claim = matches!(
+        decoded,
+        Ok(ClientMessage::Viewer(ViewerCommand::TakeControl))
+    );
+    if decoded.is_ok() && !app.drives(conn.id, claim) {
+        return vec![json(ServerMessage::Error {
+            message: "this tab only observes: another tab drives the probe (close it, then take control here)".into(),
+        })];
+    }
     let app = app.clone();
     tokio::task::spawn_blocking(move || reply(&app, decoded))
         .await
@@ -300,7 +344,7 @@ async fn handle_text(app: &Arc<AppState>, conn: &mut Conn, text: &str) -> Vec<Me
 
 /// One connection: hello, then state pushes and commands until it closes.
 async fn session(mut socket: WebSocket, app: Arc<AppState>) {
-    let _watch = PageWatch::new(app.clone());
+    let watch = PageWatch::new(app.clone());
     let hello = ServerMessage::Hello {
         mesh: app.control.mesh(),
         state_rate: app.config.state_rate,
@@ -313,7 +357,7 @@ async fn session(mut socket: WebSocket, app: Arc<AppState>) {
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
     let mut ping = tokio::time::interval(app.config.idle_timeout / 3);
     ping.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
-    let mut conn = Conn::new();
+    let mut conn = Conn::new(watch.1);
     loop {
         let outgoing: Vec<Message> = tokio::select! {
             incoming = socket.recv() => match incoming {
@@ -365,6 +409,7 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
     conn.sent += 1;
     let mut state = app.view_state(&conn.snap);
     state.seq = conn.sent;
+    state.observer = !app.drives(conn.id, false);
     let state = json(ServerMessage::State(state));
     conn.budget.spend(state.to_text().map_or(0, str::len));
     let mut out = vec![state];

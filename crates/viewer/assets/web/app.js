@@ -168,6 +168,21 @@ function onState(s) {
   showStatus(s, renderedFps);
   syncControls(s);
   showExam(s.exam);
+  $('observer').hidden = !s.observer;
+  showBehind(s);
+}
+
+/** Says so when the simulation runs slower than set (achieved rates). */
+function showBehind(s) {
+  const late = [];
+  // Haptics: the device loop runs at 1 kHz; below 900 Hz the feel degrades.
+  if (s.haptic_rate > 0 && s.haptic_rate < 900) late.push(`touch feedback at ${s.haptic_rate.toFixed(0)} Hz of 1000`);
+  // Physics: below 80 % of its setting the buffer model ages visibly.
+  if (s.physics_rate > 0 && s.physics_rate < 0.8 * s.physics_rate_setting && s.mode !== 'direct') {
+    late.push(`tissue simulation at ${s.physics_rate.toFixed(0)} Hz of ${s.physics_rate_setting.toFixed(0)}`);
+  }
+  $('behind').hidden = late.length === 0;
+  $('behind').textContent = late.length ? `The computer is falling behind: ${late.join(', ')}.` : '';
 }
 
 function syncControls(s) {
@@ -260,11 +275,33 @@ canvas.addEventListener('wheel', (e) => {
   if (e.shiftKey) { if (scene) scene.zoom(e.deltaY > 0 ? 1.1 : 1 / 1.1); return; }
   setDepth(live.probe.depth + (e.deltaY < 0 ? DEPTH_STEP : -DEPTH_STEP));
 }, { passive: false });
-window.addEventListener('keydown', (e) => {
-  if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
+// Shortcuts act on the probe only while the 3D view has focus, never on a
+// focused control (issue 19: ↑ on the vein menu switched it to acute).
+const THETA_STEP = 0.05; // rad around the thigh per arrow press
+const Z_STEP = 0.005; // m along the thigh per arrow press
+function moveProbe(dTheta, dZ) {
+  const p = live.probe;
+  p.theta = Math.max(-Math.PI, Math.min(Math.PI, p.theta + dTheta));
+  const half = live.hello ? halfLength(live.hello.mesh) : 0.1;
+  p.z = Math.max(-half, Math.min(half, p.z + dZ));
+  if (p.placed) sendProbeSoon();
+}
+function halfLength(mesh) {
+  let m = 0;
+  for (const r of mesh.rest) m = Math.max(m, Math.abs(r[2]));
+  return 0.9 * m;
+}
+canvas.addEventListener('keydown', (e) => {
   const k = e.key.toLowerCase();
-  if (k === 'arrowup' || k === 'w') setDepth(live.probe.depth + DEPTH_STEP);
-  else if (k === 'arrowdown' || k === 's') setDepth(live.probe.depth - DEPTH_STEP);
+  if (k === 'arrowleft') moveProbe(-THETA_STEP, 0);
+  else if (k === 'arrowright') moveProbe(THETA_STEP, 0);
+  else if (k === 'arrowup') moveProbe(0, Z_STEP);
+  else if (k === 'arrowdown') moveProbe(0, -Z_STEP);
+  else if (k === 'enter') {
+    if (live.state && live.state.exam_playing) send({ type: 'stop_exam' });
+    live.probe.placed = true; sendProbeSoon();
+  } else if (k === 'w') setDepth(live.probe.depth + DEPTH_STEP);
+  else if (k === 's') setDepth(live.probe.depth - DEPTH_STEP);
   else if (k === 'q') setTilt(live.probe.tilt - TILT_STEP);
   else if (k === 'e') setTilt(live.probe.tilt + TILT_STEP);
   else if (k === 'l') lift();
@@ -289,6 +326,7 @@ $('exam-start').addEventListener('click', () => { live.probe.placed = false; sen
 $('answer-yes').addEventListener('click', () => send({ type: 'exam_answer', compressible: true }));
 $('answer-no').addEventListener('click', () => send({ type: 'exam_answer', compressible: false }));
 $('exam-stop').addEventListener('click', () => send({ type: 'exam_stop' }));
+$('take-control').addEventListener('click', () => send({ type: 'take_control' }));
 
 // ---- frame loop ----------------------------------------------------------
 let fpsWindow = { t: performance.now(), frames: 0, echo: 0 };

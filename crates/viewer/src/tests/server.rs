@@ -541,3 +541,41 @@ async fn an_unacknowledged_page_gets_no_backlog() {
         "not the newest state"
     );
 }
+
+/// Issue 19, one owner of the probe: the first tab drives, a second one
+/// observes (it receives the states, its commands are refused and never
+/// reach the runtime); when the first closes, the second may take control.
+#[tokio::test]
+async fn a_second_tab_observes_until_the_first_closes() {
+    let fake = Arc::new(FakeLive::new());
+    let addr = start(fake.clone()).await;
+    let mut first = connect(addr).await;
+    assert!(!next_state(&mut first, |_| true).await.observer);
+    let mut second = connect(addr).await;
+    assert!(next_state(&mut second, |_| true).await.observer);
+    let press = r#"{"type":"probe","theta":0.1,"z":0.0,"depth":0.01,"tilt":0}"#;
+    send(&mut second, press).await;
+    assert!(next_error(&mut second).await.contains("observes"));
+    send(&mut second, r#"{"type":"take_control"}"#).await;
+    assert!(next_error(&mut second).await.contains("observes"));
+    send(&mut second, r#"{"type":"exam_start"}"#).await;
+    assert!(next_error(&mut second).await.contains("observes"));
+    assert!(fake.commands().is_empty(), "{:?}", fake.commands());
+    send(&mut first, press).await;
+    next_state(&mut second, |s| norm(s.status.physics_force) > 1.0).await;
+    assert_eq!(fake.commands().len(), 1);
+    // The driver leaves: the observer takes control and drives.
+    first.close(None).await.unwrap();
+    drop(first);
+    let t = tokio::time::Instant::now();
+    loop {
+        send(&mut second, r#"{"type":"take_control"}"#).await;
+        if !next_state(&mut second, |_| true).await.observer {
+            break;
+        }
+        assert!(t.elapsed() < Duration::from_secs(5), "never took control");
+    }
+    send(&mut second, r#"{"type":"lift"}"#).await;
+    next_state(&mut second, |s| norm(s.status.physics_force) == 0.0).await;
+    assert_eq!(fake.commands().len(), 2);
+}
