@@ -109,6 +109,7 @@ const measureLag = async ({ n, theta, z, throttle }) => {
   requestAnimationFrame(tick);
   const bytes0 = L.bytes, t00 = performance.now();
   const state = [], image = [];
+  const misses = []; // what a command without its effect left, for the JSON
   let missed = 0;
   for (let i = 0; i < n; i++) {
     const depth = i % 2 === 0 ? 0.014 : 0.010;
@@ -126,7 +127,7 @@ const measureLag = async ({ n, theta, z, throttle }) => {
         }
       };
       const timer = setTimeout(() => done(null), TIMEOUT);
-      function done(v) { clearTimeout(timer); L.listeners.splice(L.listeners.indexOf(fn), 1); resolve(v); }
+      function done(v) { if (!v) misses.push({ i, effect_seen: at !== null, sim_time: simTime, image_time: L.imageTime, f0, f: force(L.state), last_error: L.lastError, observer: L.state.observer }); clearTimeout(timer); L.listeners.splice(L.listeners.indexOf(fn), 1); resolve(v); }
       L.listeners.push(fn);
       send(depth);
     });
@@ -142,7 +143,7 @@ const measureLag = async ({ n, theta, z, throttle }) => {
     state: { p50: q(state, 0.5), p95: q(state, 0.95), max: q(state, 1) },
     image: { p50: q(image, 0.5), p95: q(image, 0.95), max: q(image, 1) },
     frame_p95: q(frames, 0.95), frames: frames.length,
-    bytes_per_s: (L.bytes - bytes0) / secs, seconds: secs,
+    bytes_per_s: (L.bytes - bytes0) / secs, seconds: secs, misses: misses.slice(0, 10),
   };
 };
 

@@ -211,6 +211,7 @@ pub(super) fn start_session(
     let haptic = std::thread::Builder::new()
         .name("haptic-loop".into())
         .spawn(move || {
+            raise_priority();
             runner.run(&st, None, |_, _| {
                 let now = clock.now();
                 let tgt = *target_out.read();
@@ -246,6 +247,21 @@ pub(super) fn start_session(
         others,
         target: target_in,
     })
+}
+
+/// Raises the calling (haptic) thread's priority where the OS permits it:
+/// the highest priority of its normal time-sharing policy (on Linux, nice
+/// −20, which needs CAP_SYS_NICE), so that the physics and the browser on a
+/// 2-core machine do not starve it (issue 19: 0 N drop-outs under load).
+/// Not a real-time FIFO policy: the loop's sleeper spins its last ~100 µs,
+/// and a FIFO thread spinning would starve the physics thread. Failure is
+/// logged, not fatal.
+fn raise_priority() {
+    use thread_priority::{set_current_thread_priority, ThreadPriority};
+    match set_current_thread_priority(ThreadPriority::Max) {
+        Ok(()) => tracing::info!("haptic loop at the highest time-sharing priority"),
+        Err(e) => tracing::warn!("haptic loop at normal priority (raising it was refused: {e:?})"),
+    }
 }
 
 /// How fast the simulated hand reaches for the page's target (m/s): a mouse
