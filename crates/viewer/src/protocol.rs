@@ -158,6 +158,10 @@ pub enum ViewerCommand {
     },
     /// Leave exam mode (an open question is dropped unscored).
     ExamStop,
+    /// The page has decoded and shown the last image frame it received
+    /// (flow control of the images: the next one is sent only then, so
+    /// that a page slow to decode never queues images).
+    ImageAck,
     /// An observer tab asks to drive the probe; granted only when no other
     /// tab drives it (the driving tab closed).
     TakeControl,
@@ -227,7 +231,9 @@ pub fn decode_client(text: &str, limits: &CommandLimits) -> Result<ClientMessage
         kind: kind.clone(),
         reason: e.to_string(),
     };
-    let (msg, known) = if kind.starts_with("exam_") || kind == "ack" || kind == "take_control" {
+    let (msg, known) = if kind.starts_with("exam_")
+        || ["ack", "image_ack", "take_control"].contains(&kind.as_str())
+    {
         let cmd: ViewerCommand = serde_json::from_value(value.clone()).map_err(invalid)?;
         (ClientMessage::Viewer(cmd), serde_json::to_value(cmd))
     } else {

@@ -136,7 +136,9 @@ impl AppState {
                 Ok(())
             }
             // Flow control and ownership, handled by the connection itself.
-            ClientMessage::Viewer(ViewerCommand::Ack { .. } | ViewerCommand::TakeControl) => Ok(()),
+            ClientMessage::Viewer(
+                ViewerCommand::Ack { .. } | ViewerCommand::ImageAck | ViewerCommand::TakeControl,
+            ) => Ok(()),
         }
     }
 
@@ -289,6 +291,8 @@ struct Conn {
     id: u64,
     sent: u64,
     acked: u64,
+    /// An image frame is on its way or being decoded by the page.
+    image_pending: bool,
     wire: WireState,
     budget: ByteBudget,
     epoch: tokio::time::Instant,
@@ -302,6 +306,7 @@ impl Conn {
             id,
             sent: 0,
             acked: 0,
+            image_pending: false,
             wire: WireState::default(),
             budget: ByteBudget::new(BYTES_PER_SECOND, BURST_BYTES, 0.0),
             epoch: tokio::time::Instant::now(),
@@ -320,6 +325,10 @@ async fn handle_text(app: &Arc<AppState>, conn: &mut Conn, text: &str) -> Vec<Me
     if let Ok(ClientMessage::Viewer(ViewerCommand::Ack { seq })) = decoded {
         // Only what was sent can be acknowledged.
         conn.acked = conn.acked.max(seq.min(conn.sent));
+        return Vec::new();
+    }
+    if let Ok(ClientMessage::Viewer(ViewerCommand::ImageAck)) = decoded {
+        conn.image_pending = false;
         return Vec::new();
     }
     let claim = matches!(
@@ -398,8 +407,9 @@ fn reply(
 
 /// The messages of one state push, latest wins: nothing while [`CREDIT`]
 /// states are unacknowledged or the byte budget is spent; else the state,
-/// then the surface nodes that moved and the new image while the budget
-/// lasts.
+/// then the surface nodes that moved and — once the page has shown the
+/// previous image ([`ViewerCommand::ImageAck`]) — the newest image, while
+/// the budget lasts.
 fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
     conn.budget.refill(conn.epoch.elapsed().as_secs_f64());
     if conn.sent - conn.acked >= CREDIT || !conn.budget.allows() {
@@ -419,10 +429,11 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
             out.push(Message::Binary(surface.into()));
         }
     }
-    if conn.budget.allows() {
+    if conn.budget.allows() && !conn.image_pending {
         let info = app.control.image(&mut conn.pixels);
         if let Some(image) = conn.wire.image(info, &conn.pixels) {
             conn.budget.spend(image.len());
+            conn.image_pending = true;
             out.push(Message::Binary(image.into()));
         }
     }

@@ -119,7 +119,9 @@ function onFrame(buf) {
       else if (gray && gray.length === px.length) for (let i = 0; i < px.length; i++) gray[i] = (gray[i] + px[i]) & 255;
       else return; // a delta without its key frame (cannot happen on one connection)
       showImage(a, b, gray, time);
-    }).catch((e) => toast(`image: ${e.message}`));
+    }).catch((e) => toast(`image: ${e.message}`))
+      // Flow control: the server sends the next image once this one is shown.
+      .finally(() => send({ type: 'image_ack' }));
   }
 }
 

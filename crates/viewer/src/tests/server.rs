@@ -52,10 +52,18 @@ async fn next_raw(ws: &mut Client) -> Message {
         .expect("socket error")
 }
 
-/// Next message of the connection; a state is acknowledged at once, as a
-/// page that keeps up does (flow control).
+/// Next message of the connection; a state or an image is acknowledged at
+/// once, as a page that keeps up does (flow control).
 async fn next(ws: &mut Client) -> Message {
     let m = next_raw(ws).await;
+    if let Message::Binary(b) = &m {
+        if matches!(
+            FrameHeader::parse(b),
+            Some((h, _)) if matches!(h.kind, FrameKind::ImagePng | FrameKind::ImageDelta)
+        ) {
+            send(ws, r#"{"type":"image_ack"}"#).await;
+        }
+    }
     if let Message::Text(t) = &m {
         if let Ok(Envelope {
             body: ServerMessage::State(s),
@@ -508,16 +516,21 @@ fn decode_png(png_bytes: &[u8]) -> Vec<u8> {
 }
 
 /// Flow control (issue 19): a page that does not acknowledge gets
-/// `CREDIT` states and then nothing, though the server ticks at 100 Hz
-/// (0.5 s is fifty ticks); one acknowledgement frees one more, the newest.
+/// `CREDIT` states and one image, then nothing, though the server ticks at
+/// 100 Hz (0.5 s is fifty ticks, and the double has a new image at every
+/// tick); one acknowledgement frees one more, the newest.
 #[tokio::test]
 async fn an_unacknowledged_page_gets_no_backlog() {
     use super::super::protocol::CREDIT;
     let fake = Arc::new(FakeLive::new());
     let mut ws = connect(start(fake).await).await;
-    let mut states = Vec::new();
+    let (mut states, mut images) = (Vec::new(), 0);
     let deadline = tokio::time::Instant::now() + Duration::from_millis(500);
     while let Ok(Some(Ok(m))) = tokio::time::timeout_at(deadline, ws.next()).await {
+        if let Message::Binary(b) = &m {
+            let kind = FrameHeader::parse(b).unwrap().0.kind;
+            images += usize::from(matches!(kind, FrameKind::ImagePng | FrameKind::ImageDelta));
+        }
         if let Message::Text(t) = m {
             if let ServerMessage::State(s) =
                 serde_json::from_str::<Envelope>(t.as_str()).unwrap().body
@@ -532,6 +545,7 @@ async fn an_unacknowledged_page_gets_no_backlog() {
         "states sent without acknowledgement"
     );
     assert_eq!(states.iter().map(|s| s.seq).collect::<Vec<_>>(), vec![1, 2]);
+    assert_eq!(images, 1, "images sent without acknowledgement");
     // An acknowledgement of a state never sent frees nothing beyond.
     send(&mut ws, r#"{"type":"ack","seq":99}"#).await;
     let third = next_state(&mut ws, |_| true).await;
