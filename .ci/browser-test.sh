@@ -63,6 +63,6 @@ if [ -z "$url" ]; then
 fi
 echo "browser-test: server at $url"
 
-ECHOTHIGH_URL="$url" SCREENSHOT_DIR="$shots" CHROMIUM=/usr/bin/chromium \
+ECHOTHIGH_URL="$url" SCREENSHOT_DIR="$shots" CHROMIUM=/usr/bin/chromium ECHOTHIGH_SERVER_PID="$server" \
   node tests/browser/viewer.test.mjs
 echo "browser-test: screenshots in $shots"

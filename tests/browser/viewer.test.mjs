@@ -5,7 +5,12 @@
 // checks: the 3D canvas and the image canvas draw non-blank pixels; dragging
 // the probe over the thigh raises the force; the vein state switches; a
 // malformed message gets an error back and the connection stays up; one exam
-// question is answered and scored. Saves screenshots. Exits non-zero on failure.
+// question is answered and scored; then, at 1280×800 with the page's CPU
+// throttled (CDP Emulation.setCPUThrottlingRate), the lag from 50 commands to
+// their effect on the state and on the image, measured in the page, and the
+// bytes per second it receives (issue 19); last, with ECHOTHIGH_SERVER_PID
+// set, the server is stopped and the page must show "disconnected" within
+// 1 s. Saves screenshots and viewer-lag.json. Exits non-zero on failure.
 import { createRequire } from 'node:module';
 import { mkdirSync, mkdtempSync, rmSync, writeFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
@@ -78,6 +83,69 @@ const findThigh = () => {
     }
   }
   return best;
+};
+
+/** CPU throttling of the page during the lag measurement (CDP rate: ×2 slower). */
+const THROTTLE = 2;
+
+/**
+ * Runs in the page: `n` presses alternating between 10 and 14 mm at (theta,
+ * z); for each, the time from sending it to the first state whose physics
+ * force moved 0.5 N its way, and to the first image showing a physics state
+ * at least that recent. Also the page's frame intervals and bytes received.
+ */
+const measureLag = async ({ n, theta, z, throttle }) => {
+  const L = window.echothigh;
+  const TIMEOUT = 3000; // ms
+  const force = (s) => Math.hypot(...s.physics_force);
+  const send = (depth) => L.send({ type: 'probe', theta, z, depth, tilt: 0 });
+  const pause = (ms) => new Promise((r) => setTimeout(r, ms));
+  send(0.010);
+  await pause(1500);
+  const frames = [];
+  let last = performance.now();
+  let run = true;
+  const tick = (t) => { frames.push(t - last); last = t; if (run) requestAnimationFrame(tick); };
+  requestAnimationFrame(tick);
+  const bytes0 = L.bytes, t00 = performance.now();
+  const state = [], image = [];
+  const misses = []; // what a command without its effect left, for the JSON
+  let missed = 0;
+  for (let i = 0; i < n; i++) {
+    const depth = i % 2 === 0 ? 0.014 : 0.010;
+    const f0 = force(L.state);
+    const up = depth > 0.012;
+    const r = await new Promise((resolve) => {
+      let at = null, simTime = null;
+      const t0 = performance.now();
+      const fn = (kind, now, d) => {
+        if (kind === 'state' && at === null) {
+          const f = force(d);
+          if (up ? f > f0 + 0.5 : f < f0 - 0.5) { at = now; simTime = d.time; }
+        } else if (kind === 'image' && at !== null && d !== null && d >= simTime) {
+          done({ state: at - t0, image: now - t0 });
+        }
+      };
+      const timer = setTimeout(() => done(null), TIMEOUT);
+      function done(v) { if (!v) misses.push({ i, effect_seen: at !== null, sim_time: simTime, image_time: L.imageTime, f0, f: force(L.state), last_error: L.lastError, observer: L.state.observer }); clearTimeout(timer); L.listeners.splice(L.listeners.indexOf(fn), 1); resolve(v); }
+      L.listeners.push(fn);
+      send(depth);
+    });
+    // A command without its effect within the timeout counts as that long.
+    if (r) { state.push(r.state); image.push(r.image); } else { missed++; state.push(TIMEOUT); image.push(TIMEOUT); }
+    await pause(400); // let the tissue settle before the next press
+  }
+  run = false;
+  const secs = (performance.now() - t00) / 1000;
+  const q = (a, p) => { const s = [...a].sort((x, y) => x - y); return s.length ? s[Math.min(s.length - 1, Math.floor(p * s.length))] : null; };
+  return {
+    commands: n, missed, throttle, viewport: [innerWidth, innerHeight],
+    state: { p50: q(state, 0.5), p95: q(state, 0.95), max: q(state, 1) },
+    image: { p50: q(image, 0.5), p95: q(image, 0.95), max: q(image, 1) },
+    frame_p95: q(frames, 0.95), frames: frames.length,
+    bytes_per_s: (L.bytes - bytes0) / secs, seconds: secs, misses: misses.slice(0, 10),
+    physics_rate: L.state.physics_rate, physics_rate_setting: L.state.physics_rate_setting,
+  };
 };
 
 const userDataDir = mkdtempSync(join(tmpdir(), 'echothigh-chromium-'));
@@ -198,6 +266,47 @@ try {
     `${shown} · score ${exam.correct}/${exam.answered}`);
   await page.screenshot({ path: join(shots, '03-exam.png') });
 
+  // Keyboard only (issue 19): focus the 3D view (no mouse), place the probe
+  // with Enter and press with W until the force rises; no mouse or pointer
+  // event reaches the page meanwhile.
+  await page.evaluate(() => {
+    window.__mouse = 0;
+    for (const t of ['mousedown', 'mouseup', 'mousemove', 'pointerdown', 'pointermove', 'click', 'wheel']) {
+      window.addEventListener(t, () => { window.__mouse += 1; }, true);
+    }
+  });
+  await page.click('#reset');
+  await until(page, () => Math.hypot(...window.echothigh.state.physics_force) < 0.5, null, 'the force to vanish after a reset');
+  await page.evaluate(() => { window.__mouse = 0; });
+  await page.focus('#scene');
+  await page.keyboard.press('ArrowUp');
+  await page.keyboard.press('Enter');
+  for (let i = 0; i < 20; i++) await page.keyboard.press('w');
+  const keyed = await until(page, () => {
+    const f = Math.hypot(...window.echothigh.state.physics_force);
+    return f > 1.0 ? { f, depth: window.echothigh.probe.depth } : null;
+  }, null, 'the force to rise from the keyboard alone');
+  const mouseEvents = await page.evaluate(() => window.__mouse);
+  check('keyboard only: the probe is placed and pressed with no mouse event', mouseEvents === 0,
+    `|F| ${keyed.f.toFixed(2)} N at ${(keyed.depth * 1000).toFixed(1)} mm, ${mouseEvents} mouse events`);
+  // A shortcut key on a focused control acts on the control, not the probe.
+  const depthBefore = await page.evaluate(() => window.echothigh.probe.depth);
+  await page.focus('#mode');
+  await page.keyboard.press('w');
+  check('shortcuts do not act while a control has focus',
+    (await page.evaluate(() => window.echothigh.probe.depth)) === depthBefore);
+
+  // A second tab observes: it sees the state, its commands are refused.
+  const second = await browser.newPage();
+  await second.goto(url);
+  await until(second, () => window.echothigh.state && window.echothigh.state.observer === true, null, 'the second tab as an observer');
+  await second.evaluate(() => window.echothigh.send({ type: 'probe', theta: 0, z: 0, depth: 0.03, tilt: 0 }));
+  await until(second, () => window.echothigh.errors > 0, null, 'the observer\'s command refused');
+  const refusal = await second.evaluate(() => window.echothigh.lastError);
+  check('a second tab is an observer whose inputs do not move the probe',
+    refusal.includes('observes') && !(await page.evaluate(() => window.echothigh.state.observer)), refusal);
+  await second.close();
+
   // Rates seen by the page over its last 300 events (mean rate; median, p95
   // and max of the intervals), as JSON (a measurement, not a check: headless chromium renders
   // WebGL in software on a shared CPU).
@@ -220,7 +329,65 @@ try {
   writeFileSync(join(shots, 'viewer-rates.json'), JSON.stringify(rates, null, 2));
   const hz = (r) => (r.rate_hz ? `${r.rate_hz.toFixed(1)} Hz` : 'n/a');
   console.log(`info page rates: state ${hz(rates.state)}, image ${hz(rates.image)}, 3D render ${hz(rates.render_3d)} (${join(shots, 'viewer-rates.json')})`);
+
+  // ---- Lag and bytes (issue 19) at 1280×800, CPU throttled ×THROTTLE. ----
+  await page.setViewportSize({ width: 1280, height: 800 });
+  const cdp = await page.context().newCDPSession(page);
+  await cdp.send('Emulation.setCPUThrottlingRate', { rate: THROTTLE });
+  await page.waitForTimeout(1000);
+  const lag = await page.evaluate(measureLag, { n: 50, theta: start.hit.theta, z: start.hit.z, throttle: THROTTLE });
+  await cdp.send('Emulation.setCPUThrottlingRate', { rate: 1 });
+  writeFileSync(join(shots, 'viewer-lag.json'), JSON.stringify(lag, null, 2));
+  const ms = (x) => (x === null ? 'n/a' : `${x.toFixed(0)} ms`);
+  console.log(`info lag over ${lag.commands} commands (${lag.missed} without effect within 3 s, counted as 3 s): state p50 ${ms(lag.state.p50)} p95 ${ms(lag.state.p95)}, ` +
+    `image p50 ${ms(lag.image.p50)} p95 ${ms(lag.image.p95)}; page frames p95 ${ms(lag.frame_p95)}; ${(lag.bytes_per_s / 1000).toFixed(0)} KB/s (${join(shots, 'viewer-lag.json')})`);
+  // The wire's budget is 360 KB/s of payload by construction (the server's
+  // token bucket, frames.rs), so 400 KB/s holds whatever the machine's load.
+  check('bytes per second per tab within the 400 KB/s budget', lag.bytes_per_s <= 400_000,
+    `${(lag.bytes_per_s / 1000).toFixed(0)} KB/s`);
+  // No backlog: with flow control a state waits for at most the page's own
+  // frame (credit of 2) plus the server's tick, so the lag is bounded by the
+  // 150 ms target plus two of the page's frame intervals (measured in this
+  // run): a backlog of stale frames, as in issue 19 (4–6 s), exceeds it by
+  // seconds. Images add one imaging period (50 ms) and their own
+  // acknowledgement. These bounds hold only while the simulation keeps its
+  // rate: when the machine starves the physics or the imaging (the page
+  // then says "falling behind"), the lag is the simulation's, not the
+  // wire's, and is reported instead of asserted. The absolute 150 ms target
+  // is asserted when, in addition, the page draws at 20 frames/s or more.
+  const keepsUp = lag.physics_rate >= 0.8 * lag.physics_rate_setting;
+  const bound = 150 + 2 * lag.frame_p95;
+  if (keepsUp) {
+    check('lag to the state bounded by the page frame (no backlog)', lag.state.p95 <= bound,
+      `p95 ${ms(lag.state.p95)} ≤ ${ms(bound)}`);
+    check('lag to the image bounded by the page frame (no backlog)', lag.image.p95 <= 2 * bound + 50,
+      `p95 ${ms(lag.image.p95)} ≤ ${ms(2 * bound + 50)}`);
+    if (lag.frame_p95 <= 50) {
+      check('lag p95 below 150 ms (state and image)', lag.state.p95 < 150 && lag.image.p95 < 150,
+        `state ${ms(lag.state.p95)}, image ${ms(lag.image.p95)}`);
+    } else {
+      console.log(`info the 150 ms target is not asserted: the page drew at p95 ${ms(lag.frame_p95)} per frame`);
+    }
+  } else {
+    console.log(`info lag not asserted: the physics ran at ${lag.physics_rate.toFixed(0)} Hz of ` +
+      `${lag.physics_rate_setting.toFixed(0)} (the machine is starved; the page showed "falling behind")`);
+  }
+  await page.screenshot({ path: join(shots, '04-1280x800.png') });
   check('no errors in the page console', consoleErrors.length === 0, consoleErrors.join(' | '));
+
+  // ---- The server stops: "disconnected" within 1 s. ----
+  const pid = Number(process.env.ECHOTHIGH_SERVER_PID || 0);
+  if (pid > 0) {
+    await until(page, () => window.echothigh.connected, null, 'a live connection');
+    const t0 = Date.now();
+    process.kill(pid, 'SIGKILL');
+    await until(page, () => document.getElementById('conn').textContent.includes('disconnected'),
+      null, '"disconnected" on the page', 5000);
+    const dt = Date.now() - t0;
+    check('the page shows "disconnected" within 1 s of the server stopping', dt <= 1000, `${dt} ms`);
+  } else {
+    console.log('info ECHOTHIGH_SERVER_PID not set: the disconnection check is skipped');
+  }
 } catch (e) {
   exitCode = 1;
   console.error(`FAIL ${e.message}`);

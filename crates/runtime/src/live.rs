@@ -18,17 +18,9 @@ pub enum CouplingMode {
     Direct,
 }
 
-/// State of the femoral vein in the scenario.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum VeinKind {
-    /// Compressible.
-    Healthy,
-    /// Acute thrombus: hypoechoic, open, deforms a little.
-    Acute,
-    /// Chronic thrombus: echogenic, rigid.
-    Chronic,
-}
+/// State of the femoral vein: the imaging crate's own type, so that the
+/// front ends, the runtime and the renderer share one definition.
+pub use echothigh_imaging::VeinState;
 
 /// Static mesh topology, sent once per connection.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -142,9 +134,14 @@ pub struct LiveSnapshot {
     /// The scalar state (time, probe, forces, rates, settings).
     #[serde(flatten)]
     pub status: LiveStatus,
+    /// The last error of a thread of the live system (a stopped physics,
+    /// link, haptic or imaging thread), in plain words; `None` when all run.
+    pub fault: Option<String>,
 }
 
-/// A command from a front end. Every numeric field is validated by the runtime.
+/// A command from a front end. Every numeric field is checked by
+/// [`LiveCommand::validate`], the one validation that the page protocol, the
+/// runtime and the viewer's test double all call.
 #[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum LiveCommand {
@@ -157,7 +154,7 @@ pub enum LiveCommand {
         theta: f64,
         /// Axial position (m).
         z: f64,
-        /// Press depth below the rest surface (m).
+        /// Press depth below the rest surface (m, [`DEPTH_RANGE`]).
         depth: f64,
         /// Tilt about the thigh axis (rad).
         tilt: f64,
@@ -171,7 +168,7 @@ pub enum LiveCommand {
     /// Change the vein state.
     SetVein {
         /// New state.
-        vein: VeinKind,
+        vein: VeinState,
     },
     /// Change the coupling mode.
     SetMode {
@@ -192,6 +189,128 @@ pub enum LiveCommand {
     Reset,
 }
 
+/// Angle range of [`LiveCommand::Probe`]'s `theta` (rad): the range of
+/// `atan2`, which is how the page computes it; one turn, nothing aliased.
+pub const THETA_RANGE: (f64, f64) = (-std::f64::consts::PI, std::f64::consts::PI);
+
+/// Press depth range of [`LiveCommand::Probe`] (m): from the rest skin down
+/// to the femur, ~40 mm under the anterior skin (`DESIGN.md` §5); deeper
+/// would ask the hand to push the probe into the bone. Lifting is
+/// [`LiveCommand::Lift`], not a negative depth.
+pub const DEPTH_RANGE: (f64, f64) = (0.0, 0.04);
+
+/// Largest |tilt| of [`LiveCommand::Probe`] (rad, ≈ 34°): a flat probe face
+/// tilted further on the elliptic thigh rides on its edge, which the contact
+/// model (a flat face on the skin) does not describe.
+pub const MAX_TILT: f64 = 0.6;
+
+/// Lowest physics rate of [`LiveCommand::SetPhysicsRate`] (Hz): below it the
+/// buffer model is older than the 100 ms the paper's Fig. 4 explores.
+pub const MIN_PHYSICS_RATE: f64 = 10.0;
+
+/// Added one-way latency range of [`LiveCommand::SetLatency`] (s): up to
+/// 200 ms, twice the paper's worst link (§4).
+pub const LATENCY_RANGE: (f64, f64) = (0.0, 0.2);
+
+/// The scenario-dependent ranges of the commands.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct CommandLimits {
+    /// Half the thigh's length (m): the probe's |z| must stay on the thigh.
+    pub half_length: f64,
+    /// Highest physics rate (Hz): the haptic rate (the physics never steps
+    /// faster than the device loop that samples it).
+    pub max_physics_rate: f64,
+}
+
+/// A command refused by [`LiveCommand::validate`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CommandError {
+    /// A number that is not finite or outside its range.
+    #[error("`{field}` = {value} {unit} is out of range [{min}, {max}] {unit}")]
+    OutOfRange {
+        /// `type.field`, e.g. `probe.depth`.
+        field: &'static str,
+        /// The value received.
+        value: f64,
+        /// Its unit.
+        unit: &'static str,
+        /// Smallest accepted value.
+        min: f64,
+        /// Largest accepted value.
+        max: f64,
+    },
+}
+
+/// Checks that `value` is finite and in `[min, max]`.
+fn check(
+    field: &'static str,
+    value: f64,
+    unit: &'static str,
+    (min, max): (f64, f64),
+) -> Result<(), CommandError> {
+    if value.is_finite() && (min..=max).contains(&value) {
+        Ok(())
+    } else {
+        Err(CommandError::OutOfRange {
+            field,
+            value,
+            unit,
+            min,
+            max,
+        })
+    }
+}
+
+impl LiveCommand {
+    /// The one range check of a front end's command against `limits` and
+    /// the constants above; the error names the field, its unit and range.
+    pub fn validate(&self, limits: &CommandLimits) -> Result<(), CommandError> {
+        match *self {
+            LiveCommand::Probe {
+                theta,
+                z,
+                depth,
+                tilt,
+            } => {
+                check("probe.theta", theta, "rad", THETA_RANGE)?;
+                let h = limits.half_length;
+                check("probe.z", z, "m", (-h, h))?;
+                check("probe.depth", depth, "m", DEPTH_RANGE)?;
+                check("probe.tilt", tilt, "rad", (-MAX_TILT, MAX_TILT))
+            }
+            LiveCommand::SetPhysicsRate { hz } => check(
+                "set_physics_rate.hz",
+                hz,
+                "Hz",
+                (MIN_PHYSICS_RATE, limits.max_physics_rate),
+            ),
+            LiveCommand::SetLatency { seconds } => {
+                check("set_latency.seconds", seconds, "s", LATENCY_RANGE)
+            }
+            LiveCommand::Lift
+            | LiveCommand::PlayExam
+            | LiveCommand::StopExam
+            | LiveCommand::SetVein { .. }
+            | LiveCommand::SetMode { .. }
+            | LiveCommand::Reset => Ok(()),
+        }
+    }
+}
+
+/// What [`LiveControl::image`] copied.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ImageInfo {
+    /// Columns (lateral pixels).
+    pub width: u32,
+    /// Rows (axial pixels).
+    pub height: u32,
+    /// Frames rendered so far (0: none yet).
+    pub frame: u64,
+    /// Simulated time of the physics state the frame shows (s, the clock of
+    /// [`LiveStatus::time`]).
+    pub time: f64,
+}
+
 /// What the runtime offers a live front end.
 pub trait LiveControl: Send + Sync {
     /// The mesh topology (static).
@@ -199,11 +318,21 @@ pub trait LiveControl: Send + Sync {
     /// Copies the latest state into `out`.
     fn snapshot(&self, out: &mut LiveSnapshot);
     /// Copies the latest echographic frame (8-bit grayscale, row-major,
-    /// `width × height`, axial rows) into `out`; returns its size and a frame
-    /// counter that increases with every new frame.
-    fn image(&self, out: &mut Vec<u8>) -> (u32, u32, u64);
+    /// `width × height`, axial rows) into `out`; returns its size, a frame
+    /// counter that increases with every new frame, and the time of the
+    /// physics state it shows.
+    fn image(&self, out: &mut Vec<u8>) -> ImageInfo;
     /// Current vein state.
-    fn vein(&self) -> VeinKind;
-    /// Applies a command; an invalid one is refused with a message.
+    fn vein(&self) -> VeinState;
+    /// The ranges its commands must respect ([`LiveCommand::validate`]).
+    fn limits(&self) -> CommandLimits;
+    /// Applies a command; an invalid one is refused with a message. May
+    /// block for a restart of the threads (tens of ms): an async caller runs
+    /// it off its executor.
     fn command(&self, cmd: LiveCommand) -> Result<(), String>;
+    /// A page started looking at the live state (the image is rendered only
+    /// while at least one looks). Each call is paired with [`Self::page_closed`].
+    fn page_opened(&self) {}
+    /// A page stopped looking (see [`Self::page_opened`]).
+    fn page_closed(&self) {}
 }

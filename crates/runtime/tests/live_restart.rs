@@ -4,7 +4,7 @@
 //! with generous time limits: only positions are asserted, not timings.
 
 use echothigh_runtime::live::{CouplingMode, LiveCommand, LiveControl, LiveSnapshot};
-use echothigh_runtime::live_system::LiveSystem;
+use echothigh_runtime::live_system::{LiveSystem, LIFTED_DEPTH};
 use echothigh_runtime::scenario::Scenario;
 use std::time::{Duration, Instant};
 
@@ -86,11 +86,52 @@ fn a_mode_change_keeps_the_pressed_probe_and_a_reset_does_not() {
         "device jumped from {held} m to {kept} m deep on a mode change"
     );
 
-    // A reset starts from rest: the device at the hand's target.
+    // A reset starts from rest with the probe lifted: the device at the
+    // lifted target, 20 mm above the skin where it was pressed (1 mm: the
+    // bound used above for "where the session left it").
     system.command(LiveCommand::Reset).unwrap();
     let reset = wait_for(&system, "the reset session's first tick", |s| {
         s.status.device != [0.0; 3] && (depth(&scenario, s) - held).abs() > 1e-3
     });
-    assert!((depth(&scenario, &reset) - target).abs() < 1e-3);
-    system.shutdown();
+    assert!((depth(&scenario, &reset) - LIFTED_DEPTH).abs() < 1e-3);
+    system.shutdown().unwrap();
+}
+
+/// Issue 19, safe transitions: after a reset from a firm press, the force
+/// in the first 500 ms is zero, physics and rendered alike: the tissue is at
+/// rest and the probe 20 mm above it, so no contact exists and no force can
+/// be justified (the ramp bound of a ramp from zero is zero until the
+/// trainee presses again). Then a press brings the force back.
+#[test]
+fn a_reset_from_a_press_starts_lifted_with_no_force() {
+    let scenario = Scenario::default();
+    let system = LiveSystem::start(scenario.clone()).unwrap();
+    let press = LiveCommand::Probe {
+        theta: 0.0,
+        z: 0.0,
+        depth: 0.014,
+        tilt: 0.0,
+    };
+    system.command(press.clone()).unwrap();
+    wait_for(&system, "a firm press", |s| s.status.physics_force[1] > 3.0);
+    system.command(LiveCommand::Reset).unwrap();
+    // The new session's first report, then its first 500 ms.
+    let first = wait_for(&system, "the reset session's first tick", |s| {
+        s.status.device != [0.0; 3] && s.status.time < 0.2
+    });
+    let mut worst: f64 = 0.0;
+    let end = first.status.time + 0.5;
+    wait_for(&system, "500 ms after the reset", |s| {
+        let n = |f: [f64; 3]| (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]).sqrt();
+        worst = worst
+            .max(n(s.status.physics_force))
+            .max(n(s.status.rendered_force));
+        s.status.time > end
+    });
+    assert_eq!(worst, 0.0, "force after a reset");
+    system.command(press).unwrap();
+    wait_for(&system, "the force to return with a new press", |s| {
+        s.status.physics_force[1] > 1.0
+    });
+    system.shutdown().unwrap();
 }

@@ -5,7 +5,7 @@
 //! server, and is revealed to the page once the question is answered.
 
 use super::protocol::{ExamResult, ExamStatus};
-use echothigh_runtime::live::VeinKind;
+use echothigh_runtime::live::VeinState;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -22,13 +22,17 @@ pub enum ExamError {
 pub struct ExamSession {
     rng: ChaCha8Rng,
     /// The hidden vein state of the open question.
-    hidden: Option<VeinKind>,
+    hidden: Option<VeinState>,
+    /// The trainee has placed the probe since the question opened: only
+    /// then does the contact force count (issue 19: the force of the
+    /// question's own reset is not the trainee's press).
+    armed: bool,
     status: ExamStatus,
 }
 
 /// Whether `vein` collapses under the probe: only a healthy vein does.
-pub fn is_compressible(vein: VeinKind) -> bool {
-    vein == VeinKind::Healthy
+pub fn is_compressible(vein: VeinState) -> bool {
+    vein == VeinState::Healthy
 }
 
 impl ExamSession {
@@ -37,6 +41,7 @@ impl ExamSession {
         Self {
             rng: ChaCha8Rng::seed_from_u64(seed),
             hidden: None,
+            armed: false,
             status: ExamStatus::default(),
         }
     }
@@ -49,23 +54,31 @@ impl ExamSession {
     /// Opens a question: draws a vein state uniformly among the three and
     /// returns it, for the caller to hand to the runtime. An open question
     /// is dropped unscored.
-    pub fn start(&mut self) -> VeinKind {
+    pub fn start(&mut self) -> VeinState {
         let vein = match self.rng.gen_range(0..3) {
-            0 => VeinKind::Healthy,
-            1 => VeinKind::Acute,
-            _ => VeinKind::Chronic,
+            0 => VeinState::Healthy,
+            1 => VeinState::Acute,
+            _ => VeinState::Chronic,
         };
         self.hidden = Some(vein);
+        self.armed = false;
         self.status.open = true;
         self.status.question += 1;
         self.status.peak_force = 0.0;
         vein
     }
 
+    /// The trainee placed or moved the probe: from now on the open
+    /// question's contact forces are the trainee's own.
+    pub fn trainee_pressed(&mut self) {
+        self.armed = self.status.open;
+    }
+
     /// Records the contact force magnitude on the thigh (N) while a question
-    /// is open; the question's peak force is the largest seen.
+    /// is open and the trainee has placed the probe since it opened
+    /// ([`Self::trainee_pressed`]); the question's peak force is the largest seen.
     pub fn observe_force(&mut self, magnitude: f64) {
-        if self.status.open && magnitude.is_finite() {
+        if self.status.open && self.armed && magnitude.is_finite() {
             self.status.peak_force = self.status.peak_force.max(magnitude);
         }
     }
@@ -132,7 +145,7 @@ mod tests {
             let answer = i % 2 == 0;
             let r = s.answer(answer).unwrap();
             assert_eq!(r.truth, truth);
-            assert_eq!(r.correct, answer == (truth == VeinKind::Healthy));
+            assert_eq!(r.correct, answer == (truth == VeinState::Healthy));
             expected_correct += u32::from(r.correct);
         }
         let st = s.status();
@@ -155,6 +168,7 @@ mod tests {
         let mut s = ExamSession::new(3);
         s.observe_force(50.0); // no question open: ignored
         s.start();
+        s.trainee_pressed();
         for f in [1.0, 7.5, f64::NAN, 3.0, f64::INFINITY] {
             s.observe_force(f);
         }
@@ -164,6 +178,30 @@ mod tests {
         s.observe_force(99.0); // closed: ignored
         assert_eq!(s.status().last.unwrap().peak_force, 7.5);
         s.start();
+        assert_eq!(s.status().peak_force, 0.0);
+    }
+
+    /// Issue 19: the force before the trainee's first press of a question
+    /// (the spike of a reset that restarts pressed in: 46.5 N was recorded
+    /// when aiming at ~12 N) is not the trainee's; the recorded peak is
+    /// exactly the trainee's own press.
+    #[test]
+    fn the_peak_counts_only_the_trainees_own_presses() {
+        let mut s = ExamSession::new(5);
+        s.trainee_pressed(); // no question open: does not arm the next one
+        s.start();
+        for f in [46.5, 30.0, 0.0] {
+            s.observe_force(f); // the question's own reset, before any press
+        }
+        assert_eq!(s.status().peak_force, 0.0);
+        s.trainee_pressed();
+        for f in [0.0, 4.0, 12.1, 11.8] {
+            s.observe_force(f);
+        }
+        assert_eq!(s.answer(true).unwrap().peak_force, 12.1);
+        // The next question starts unarmed again.
+        s.start();
+        s.observe_force(41.6);
         assert_eq!(s.status().peak_force, 0.0);
     }
 

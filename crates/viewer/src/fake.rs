@@ -4,9 +4,12 @@
 //! `x/(ax + b)`), so the server's tests see forces that rise with the press.
 
 use echothigh_runtime::live::{
-    CouplingMode, LiveCommand, LiveControl, LiveMesh, LiveSnapshot, LiveStatus, VeinKind,
+    CommandLimits, CouplingMode, ImageInfo, LiveCommand, LiveControl, LiveMesh, LiveSnapshot,
+    LiveStatus, VeinState,
 };
-use std::sync::Mutex;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{mpsc, Mutex};
+use std::time::Duration;
 
 const N_THETA: usize = 24;
 const N_Z: usize = 10;
@@ -21,7 +24,7 @@ const IMAGE: (u32, u32) = (32, 24);
 #[derive(Debug, Default)]
 struct Inner {
     probe: Option<(f64, f64, f64, f64)>,
-    vein: Option<VeinKind>,
+    vein: Option<VeinState>,
     mode: Option<CouplingMode>,
     rate: f64,
     latency: f64,
@@ -34,7 +37,15 @@ struct Inner {
 #[derive(Debug, Default)]
 pub struct FakeLive {
     inner: Mutex<Inner>,
+    watchers: AtomicUsize,
+    /// When set, the next mode change waits (without holding `inner`, as the
+    /// live system's snapshot never waits for a restart) until released.
+    gate: Mutex<Option<mpsc::Receiver<()>>>,
+    gate_timed_out: AtomicBool,
 }
+
+/// How long a held mode change waits for its release before giving up.
+pub const GATE_WAIT: Duration = Duration::from_secs(10);
 
 impl FakeLive {
     /// A thigh at rest, healthy vein, buffer mode.
@@ -42,7 +53,7 @@ impl FakeLive {
         let f = Self::default();
         {
             let mut i = f.inner.lock().unwrap();
-            i.vein = Some(VeinKind::Healthy);
+            i.vein = Some(VeinState::Healthy);
             i.mode = Some(CouplingMode::Buffer);
             i.rate = 100.0;
         }
@@ -52,6 +63,30 @@ impl FakeLive {
     /// Commands received so far.
     pub fn commands(&self) -> Vec<LiveCommand> {
         self.inner.lock().unwrap().commands.clone()
+    }
+
+    /// Pages looking now ([`LiveControl::page_opened`] minus closed).
+    pub fn watchers(&self) -> usize {
+        self.watchers.load(Ordering::SeqCst)
+    }
+
+    /// Makes the next `set_mode` block, like a restart of the threads, until
+    /// the returned sender sends (or [`GATE_WAIT`] passes, which
+    /// [`Self::gate_timed_out`] then reports).
+    pub fn hold_next_mode_change(&self) -> mpsc::Sender<()> {
+        let (tx, rx) = mpsc::channel();
+        *self.gate.lock().unwrap() = Some(rx);
+        tx
+    }
+
+    /// Whether the held mode change has arrived (taken the gate).
+    pub fn gate_taken(&self) -> bool {
+        self.gate.lock().unwrap().is_none()
+    }
+
+    /// Whether a held mode change gave up waiting for its release.
+    pub fn gate_timed_out(&self) -> bool {
+        self.gate_timed_out.load(Ordering::SeqCst)
     }
 
     fn rest(i_t: usize, i_z: usize) -> [f64; 3] {
@@ -127,19 +162,53 @@ impl LiveControl for FakeLive {
         };
     }
 
-    fn image(&self, out: &mut Vec<u8>) -> (u32, u32, u64) {
+    fn image(&self, out: &mut Vec<u8>) -> ImageInfo {
         let mut i = self.inner.lock().unwrap();
         i.frame += 1;
+        let f = i.frame as u32;
         out.clear();
-        out.extend((0..IMAGE.0 * IMAGE.1).map(|k| (k % 251) as u8));
-        (IMAGE.0, IMAGE.1, i.frame)
+        out.extend((0..IMAGE.0 * IMAGE.1).map(|k| ((k + f) % 251) as u8));
+        ImageInfo {
+            width: IMAGE.0,
+            height: IMAGE.1,
+            frame: i.frame,
+            time: 0.01 * i.frame as f64,
+        }
     }
 
-    fn vein(&self) -> VeinKind {
-        self.inner.lock().unwrap().vein.unwrap_or(VeinKind::Healthy)
+    fn page_opened(&self) {
+        self.watchers.fetch_add(1, Ordering::SeqCst);
+    }
+
+    fn page_closed(&self) {
+        self.watchers.fetch_sub(1, Ordering::SeqCst);
+    }
+
+    fn vein(&self) -> VeinState {
+        self.inner
+            .lock()
+            .unwrap()
+            .vein
+            .unwrap_or(VeinState::Healthy)
+    }
+
+    fn limits(&self) -> CommandLimits {
+        CommandLimits {
+            half_length: LENGTH / 2.0,
+            max_physics_rate: 1000.0,
+        }
     }
 
     fn command(&self, cmd: LiveCommand) -> Result<(), String> {
+        cmd.validate(&self.limits()).map_err(|e| e.to_string())?;
+        if matches!(cmd, LiveCommand::SetMode { .. }) {
+            let gate = self.gate.lock().unwrap().take();
+            if let Some(rx) = gate {
+                if rx.recv_timeout(GATE_WAIT).is_err() {
+                    self.gate_timed_out.store(true, Ordering::SeqCst);
+                }
+            }
+        }
         let mut i = self.inner.lock().unwrap();
         i.commands.push(cmd.clone());
         match cmd {
@@ -149,9 +218,6 @@ impl LiveControl for FakeLive {
                 depth,
                 tilt,
             } => {
-                if z.abs() > LENGTH / 2.0 {
-                    return Err(format!("probe.z = {z} m is off the thigh"));
-                }
                 i.probe = Some((theta, z, depth.min(0.9 * D_MAX), tilt));
             }
             LiveCommand::Lift | LiveCommand::Reset => i.probe = None,

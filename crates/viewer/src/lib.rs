@@ -11,6 +11,8 @@ mod assets;
 mod exam;
 #[cfg(test)]
 mod fake;
+mod frames;
+mod idle;
 pub mod protocol;
 mod server;
 #[cfg(test)]
@@ -45,6 +47,11 @@ pub struct Args {
     /// Rate at which the page receives the state (Hz, 1..=120).
     #[arg(long, default_value_t = 40.0)]
     pub rate: f64,
+    /// Close a connection from which nothing arrived for this long (s,
+    /// 1..=3600); open pages answer the server's pings, so only dead or
+    /// idle clients are closed.
+    #[arg(long, default_value_t = idle::DEFAULT_IDLE_TIMEOUT.as_secs_f64())]
+    pub idle_timeout: f64,
 }
 
 /// Refuses a non-loopback `bind` unless `allow_remote`.
@@ -63,6 +70,14 @@ pub fn check_rate(rate: f64) -> Result<()> {
     Ok(())
 }
 
+/// Checks the idle timeout (s).
+pub fn check_idle_timeout(seconds: f64) -> Result<std::time::Duration> {
+    if !(seconds.is_finite() && (1.0..=3600.0).contains(&seconds)) {
+        bail!("--idle-timeout {seconds} is out of range [1, 3600] s");
+    }
+    Ok(std::time::Duration::from_secs_f64(seconds))
+}
+
 /// The URL a browser opens for a server bound at `addr`.
 pub fn url(addr: SocketAddr) -> String {
     format!("http://{addr}/")
@@ -73,12 +88,14 @@ pub fn url(addr: SocketAddr) -> String {
 pub fn run(args: Args) -> Result<()> {
     check_bind(args.bind, args.allow_remote)?;
     check_rate(args.rate)?;
+    let idle_timeout = check_idle_timeout(args.idle_timeout)?;
     let scenario = Scenario::load(args.scenario.as_deref())?;
     let system = LiveSystem::start(scenario).context("starting the live simulation")?;
     let control: Arc<dyn LiveControl> = system.clone();
     let config = ServerConfig {
         state_rate: args.rate,
         allow_remote: args.allow_remote,
+        idle_timeout,
     };
     let addr = SocketAddr::new(args.bind, args.port);
     let served = tokio::runtime::Builder::new_current_thread()
@@ -86,8 +103,8 @@ pub fn run(args: Args) -> Result<()> {
         .build()
         .context("starting the web server's async runtime")
         .and_then(|rt| rt.block_on(serve(control, addr, config, shutdown_signal())));
-    system.shutdown();
-    served
+    let stopped = system.shutdown().context("stopping the live simulation");
+    served.and(stopped)
 }
 
 /// Resolves on Ctrl-C (or if the signal cannot be installed, never).
@@ -127,6 +144,7 @@ pub async fn serve_on(
         exam::ExamSession::from_entropy(),
         config,
     ));
+    let listener = idle::IdleListener::new(listener, config.idle_timeout);
     axum::serve(listener, server::router(state))
         .with_graceful_shutdown(shutdown)
         .await

@@ -19,7 +19,7 @@
 //!
 //! Units: SI (m, N, s, Hz), thigh frame (z along the axis, y anterior).
 
-use echothigh_runtime::live::{LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, VeinKind};
+use echothigh_runtime::live::{LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, VeinState};
 use serde::{Deserialize, Serialize};
 
 /// Version carried by every JSON envelope and binary frame header.
@@ -28,21 +28,10 @@ pub const PROTOCOL_VERSION: u32 = 1;
 /// Largest accepted page message (bytes). Commands are a few dozen bytes.
 pub const MAX_CLIENT_MESSAGE: usize = 4096;
 
-/// Largest press depth a page may ask for (m): the tissue above the femur is
-/// ~40 mm thick (`DESIGN.md` §5), so anything deeper is a bad message.
-pub const MAX_DEPTH: f64 = 0.05;
-
-/// Largest probe tilt about the thigh axis a page may ask for (rad, 45°).
-pub const MAX_TILT: f64 = std::f64::consts::FRAC_PI_4;
-
-/// Largest |z| a page may ask for (m); the runtime checks the thigh's own length.
-pub const MAX_AXIAL: f64 = 1.0;
-
-/// Physics rate range accepted by [`LiveCommand::SetPhysicsRate`] (Hz).
-pub const PHYSICS_RATE_RANGE: (f64, f64) = (10.0, 1000.0);
-
-/// Added latency range accepted by [`LiveCommand::SetLatency`] (s).
-pub const LATENCY_RANGE: (f64, f64) = (0.0, 0.2);
+pub use echothigh_runtime::live::{
+    CommandError, CommandLimits, DEPTH_RANGE, LATENCY_RANGE, MAX_TILT, MIN_PHYSICS_RATE,
+    THETA_RANGE,
+};
 
 /// A server → page JSON message with its protocol version.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -94,20 +83,31 @@ pub struct ViewState {
     #[serde(flatten)]
     pub status: LiveStatus,
     /// Vein state; `None` while an exam question hides it.
-    pub vein: Option<VeinKind>,
+    pub vein: Option<VeinState>,
     /// Exam session.
     pub exam: ExamStatus,
+    /// This tab only observes: another one drives the probe and the exam
+    /// (issue 19: two tabs fought over the probe).
+    pub observer: bool,
+    /// Number of this state on its connection (1, 2, …): the page
+    /// acknowledges it ([`ViewerCommand::Ack`]) once drawn.
+    pub seq: u64,
+    /// A thread of the simulation stopped, in plain words (`None`: all run).
+    pub fault: Option<String>,
 }
 
 impl ViewState {
     /// The scalar state of `snap`, sanitized ([`LiveStatus::sanitized`]: a
     /// non-finite value becomes 0, so the page never sees NaN); `vein` and
     /// `exam` come from the server.
-    pub fn from_snapshot(snap: &LiveSnapshot, vein: Option<VeinKind>, exam: ExamStatus) -> Self {
+    pub fn from_snapshot(snap: &LiveSnapshot, vein: Option<VeinState>, exam: ExamStatus) -> Self {
         Self {
             status: snap.status.sanitized(),
             vein,
             exam,
+            observer: false,
+            seq: 0,
+            fault: snap.fault.clone(),
         }
     }
 }
@@ -137,7 +137,7 @@ pub struct ExamResult {
     /// The trainee's answer: the vein is compressible.
     pub answered_compressible: bool,
     /// The hidden vein state, revealed once answered.
-    pub truth: VeinKind,
+    pub truth: VeinState,
     /// Whether the answer was right (only a healthy vein is compressible).
     pub correct: bool,
     /// Peak contact force used during the question (N).
@@ -158,7 +158,24 @@ pub enum ViewerCommand {
     },
     /// Leave exam mode (an open question is dropped unscored).
     ExamStop,
+    /// The page has decoded and shown the last image frame it received
+    /// (flow control of the images: the next one is sent only then, so
+    /// that a page slow to decode never queues images).
+    ImageAck,
+    /// An observer tab asks to drive the probe; granted only when no other
+    /// tab drives it (the driving tab closed).
+    TakeControl,
+    /// The page has drawn the state numbered `seq` (flow control: the
+    /// server sends a new state only when at most [`CREDIT`] − 1 are unacknowledged).
+    Ack {
+        /// [`ViewState::seq`] of the drawn state.
+        seq: u64,
+    },
 }
+
+/// States a connection may have unacknowledged: one being drawn by the page,
+/// one on its way. More would queue stale frames (the lag of issue 19).
+pub const CREDIT: u64 = 2;
 
 /// A decoded, validated page message.
 #[derive(Debug, Clone, PartialEq)]
@@ -189,22 +206,15 @@ pub enum ProtocolError {
         /// The decoder's explanation.
         reason: String,
     },
-    /// A number that is not finite or out of its range.
-    #[error("`{field}` = {value} is out of range [{min}, {max}]")]
-    OutOfRange {
-        /// `type.field`, e.g. `probe.depth`.
-        field: &'static str,
-        /// The value received.
-        value: f64,
-        /// Smallest accepted value.
-        min: f64,
-        /// Largest accepted value.
-        max: f64,
-    },
+    /// A command outside its range ([`LiveCommand::validate`], the same
+    /// check, and message, as the runtime's).
+    #[error(transparent)]
+    Command(#[from] CommandError),
 }
 
-/// Decodes and validates one page text message.
-pub fn decode_client(text: &str) -> Result<ClientMessage, ProtocolError> {
+/// Decodes one page text message and validates it against `limits` (those
+/// of the live system it is for, [`echothigh_runtime::live::LiveControl::limits`]).
+pub fn decode_client(text: &str, limits: &CommandLimits) -> Result<ClientMessage, ProtocolError> {
     if text.len() > MAX_CLIENT_MESSAGE {
         return Err(ProtocolError::TooLong(text.len()));
     }
@@ -221,7 +231,9 @@ pub fn decode_client(text: &str) -> Result<ClientMessage, ProtocolError> {
         kind: kind.clone(),
         reason: e.to_string(),
     };
-    let (msg, known) = if kind.starts_with("exam_") {
+    let (msg, known) = if kind.starts_with("exam_")
+        || ["ack", "image_ack", "take_control"].contains(&kind.as_str())
+    {
         let cmd: ViewerCommand = serde_json::from_value(value.clone()).map_err(invalid)?;
         (ClientMessage::Viewer(cmd), serde_json::to_value(cmd))
     } else {
@@ -241,54 +253,10 @@ pub fn decode_client(text: &str) -> Result<ClientMessage, ProtocolError> {
             });
         }
     }
-    validate(&msg)?;
+    if let ClientMessage::Live(cmd) = &msg {
+        cmd.validate(limits)?;
+    }
     Ok(msg)
-}
-
-/// Checks that `value` is finite and within `[min, max]`.
-fn check(field: &'static str, value: f64, min: f64, max: f64) -> Result<(), ProtocolError> {
-    if value.is_finite() && (min..=max).contains(&value) {
-        Ok(())
-    } else {
-        Err(ProtocolError::OutOfRange {
-            field,
-            value,
-            min,
-            max,
-        })
-    }
-}
-
-/// Range checks of the numbers a page may send (the runtime checks again
-/// against the scenario, e.g. the thigh's length).
-fn validate(msg: &ClientMessage) -> Result<(), ProtocolError> {
-    use std::f64::consts::TAU;
-    match *msg {
-        ClientMessage::Live(LiveCommand::Probe {
-            theta,
-            z,
-            depth,
-            tilt,
-        }) => {
-            check("probe.theta", theta, -TAU, TAU)?;
-            check("probe.z", z, -MAX_AXIAL, MAX_AXIAL)?;
-            check("probe.depth", depth, 0.0, MAX_DEPTH)?;
-            check("probe.tilt", tilt, -MAX_TILT, MAX_TILT)
-        }
-        ClientMessage::Live(LiveCommand::SetPhysicsRate { hz }) => check(
-            "set_physics_rate.hz",
-            hz,
-            PHYSICS_RATE_RANGE.0,
-            PHYSICS_RATE_RANGE.1,
-        ),
-        ClientMessage::Live(LiveCommand::SetLatency { seconds }) => check(
-            "set_latency.seconds",
-            seconds,
-            LATENCY_RANGE.0,
-            LATENCY_RANGE.1,
-        ),
-        _ => Ok(()),
-    }
 }
 
 /// Kind of a binary server → page frame.
@@ -300,6 +268,15 @@ pub enum FrameKind {
     /// Deformed surface: `a` = node count, `b` = 0, then `3a` f32 positions
     /// (m) and `a` f32 compressions (fraction of the asymptote, 0..1).
     Surface = 2,
+    /// Echographic image as a PNG: `a` = width, `b` = height, then the f64
+    /// simulated time (s) of the state it shows, then an 8-bit gray PNG.
+    ImagePng = 3,
+    /// The change of the image since the connection's previous image frame:
+    /// as [`FrameKind::ImagePng`], the PNG holding `new − old` modulo 256.
+    ImageDelta = 4,
+    /// The surface nodes that moved: `a` = their count, `b` = all nodes,
+    /// then `a` u32 indices, `3a` f32 positions (m), `a` f32 compressions.
+    SurfaceDelta = 5,
 }
 
 /// Magic bytes opening every binary frame.
@@ -341,16 +318,21 @@ impl FrameHeader {
         let kind = match head[5] {
             1 => FrameKind::Image,
             2 => FrameKind::Surface,
+            3 => FrameKind::ImagePng,
+            4 => FrameKind::ImageDelta,
+            5 => FrameKind::SurfaceDelta,
             _ => return None,
         };
         let a = u32::from_le_bytes(head[8..12].try_into().ok()?);
         let b = u32::from_le_bytes(head[12..16].try_into().ok()?);
         let payload = &frame[FRAME_HEADER_LEN..];
-        let expected = match kind {
-            FrameKind::Image => a as usize * b as usize,
-            FrameKind::Surface => a as usize * 16,
+        let fits = match kind {
+            FrameKind::Image => payload.len() == a as usize * b as usize,
+            FrameKind::Surface => payload.len() == a as usize * 16,
+            FrameKind::ImagePng | FrameKind::ImageDelta => payload.len() > 8,
+            FrameKind::SurfaceDelta => payload.len() == a as usize * 20 && a <= b,
         };
-        (payload.len() == expected).then_some((FrameHeader { kind, a, b }, payload))
+        fits.then_some((FrameHeader { kind, a, b }, payload))
     }
 }
 

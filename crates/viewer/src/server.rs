@@ -1,17 +1,20 @@
 //! The viewer's web server: the embedded page and the `/ws` WebSocket.
 //!
 //! One task per connection pushes the live state at [`ServerConfig::state_rate`]
-//! (JSON scalars, the deformed surface and — when a new one exists — the
-//! echographic image as binary frames, see [`super::protocol`]) and applies
-//! the page's commands. The exam session is shared by all connections and
+//! (JSON scalars, the surface nodes that moved and — when a new one exists —
+//! the echographic image as a PNG or a PNG of its change, see
+//! [`super::frames`]), with flow control: a new state only when the page has
+//! acknowledged all but [`CREDIT`] − 1 of those sent, within a byte budget
+//! ([`super::frames::BYTES_PER_SECOND`]), always the latest (never a
+//! backlog). Commands run off the async executor. The exam session is shared by all connections and
 //! lives only here, so the hidden vein state never reaches the page before it
 //! is answered.
 
 use super::assets;
 use super::exam::ExamSession;
+use super::frames::{ByteBudget, WireState, BURST_BYTES, BYTES_PER_SECOND};
 use super::protocol::{
-    decode_client, encode_image, encode_surface, ClientMessage, Envelope, ServerMessage, ViewState,
-    ViewerCommand,
+    decode_client, ClientMessage, Envelope, ServerMessage, ViewState, ViewerCommand, CREDIT,
 };
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::extract::State;
@@ -31,6 +34,9 @@ pub struct ServerConfig {
     /// Accept any `Host` (the server was bound to a non-loopback address on
     /// purpose, `--allow-remote`); otherwise only loopback host names.
     pub allow_remote: bool,
+    /// A connection (HTTP or WebSocket) from which nothing was read for this
+    /// long is closed ([`super::idle`]); pages are pinged every third of it.
+    pub idle_timeout: Duration,
 }
 
 impl Default for ServerConfig {
@@ -38,6 +44,7 @@ impl Default for ServerConfig {
         Self {
             state_rate: 40.0,
             allow_remote: false,
+            idle_timeout: super::idle::DEFAULT_IDLE_TIMEOUT,
         }
     }
 }
@@ -47,6 +54,9 @@ pub struct AppState {
     control: Arc<dyn LiveControl>,
     exam: Mutex<ExamSession>,
     config: ServerConfig,
+    /// The connection that drives the probe (the first one; `None` once it
+    /// closed), and the last connection number given.
+    owner: Mutex<(Option<u64>, u64)>,
 }
 
 impl AppState {
@@ -56,6 +66,34 @@ impl AppState {
             control,
             exam: Mutex::new(exam),
             config,
+            owner: Mutex::new((None, 0)),
+        }
+    }
+
+    /// A new connection's number; it drives the probe if nobody does.
+    fn join(&self) -> u64 {
+        let mut o = self.owner.lock().unwrap_or_else(|e| e.into_inner());
+        o.1 += 1;
+        let id = o.1;
+        o.0.get_or_insert(id);
+        id
+    }
+
+    /// Whether connection `id` drives the probe; `claim` makes it the
+    /// driver if nobody is.
+    fn drives(&self, id: u64, claim: bool) -> bool {
+        let mut o = self.owner.lock().unwrap_or_else(|e| e.into_inner());
+        if claim && o.0.is_none() {
+            o.0 = Some(id);
+        }
+        o.0 == Some(id)
+    }
+
+    /// Connection `id` closed: if it drove, nobody drives until a tab asks.
+    fn leave(&self, id: u64) {
+        let mut o = self.owner.lock().unwrap_or_else(|e| e.into_inner());
+        if o.0 == Some(id) {
+            o.0 = None;
         }
     }
 
@@ -70,16 +108,22 @@ impl AppState {
             ClientMessage::Live(LiveCommand::SetVein { .. }) if self.exam().is_open() => {
                 Err("the vein state is hidden during an exam question: answer it or leave the exam first".into())
             }
+            ClientMessage::Live(cmd @ LiveCommand::Probe { .. }) => {
+                self.control.command(cmd)?;
+                self.exam().trainee_pressed();
+                Ok(())
+            }
             ClientMessage::Live(cmd) => self.control.command(cmd),
             ClientMessage::Viewer(ViewerCommand::ExamStart) => {
-                let mut exam = self.exam();
-                let vein = exam.start();
+                // The exam lock is not held across the restart: the other
+                // connections' pushes read the exam status meanwhile.
+                let vein = self.exam().start();
                 let applied = self
                     .control
                     .command(LiveCommand::SetVein { vein })
                     .and_then(|()| self.control.command(LiveCommand::Reset));
                 if let Err(e) = applied {
-                    exam.stop();
+                    self.exam().stop();
                     return Err(format!("could not start the exam question: {e}"));
                 }
                 Ok(())
@@ -91,6 +135,10 @@ impl AppState {
                 self.exam().stop();
                 Ok(())
             }
+            // Flow control and ownership, handled by the connection itself.
+            ClientMessage::Viewer(
+                ViewerCommand::Ack { .. } | ViewerCommand::ImageAck | ViewerCommand::TakeControl,
+            ) => Ok(()),
         }
     }
 
@@ -218,8 +266,94 @@ fn json(body: ServerMessage) -> Message {
     Message::Text(Utf8Bytes::from(text))
 }
 
+/// A page looking at the live state, from its connection to its close
+/// ([`LiveControl::page_opened`]), with its connection number.
+struct PageWatch(Arc<AppState>, u64);
+
+impl PageWatch {
+    fn new(app: Arc<AppState>) -> Self {
+        app.control.page_opened();
+        let id = app.join();
+        Self(app, id)
+    }
+}
+
+impl Drop for PageWatch {
+    fn drop(&mut self) {
+        self.0.leave(self.1);
+        self.0.control.page_closed();
+    }
+}
+
+/// What one connection knows of its page: its number, states sent and
+/// acknowledged, the frames it holds ([`WireState`]), its byte budget.
+struct Conn {
+    id: u64,
+    sent: u64,
+    acked: u64,
+    /// An image frame is on its way or being decoded by the page.
+    image_pending: bool,
+    wire: WireState,
+    budget: ByteBudget,
+    epoch: tokio::time::Instant,
+    snap: LiveSnapshot,
+    pixels: Vec<u8>,
+}
+
+impl Conn {
+    fn new(id: u64) -> Self {
+        Self {
+            id,
+            sent: 0,
+            acked: 0,
+            image_pending: false,
+            wire: WireState::default(),
+            budget: ByteBudget::new(BYTES_PER_SECOND, BURST_BYTES, 0.0),
+            epoch: tokio::time::Instant::now(),
+            snap: LiveSnapshot::default(),
+            pixels: Vec::new(),
+        }
+    }
+}
+
+/// Handles a page message: an acknowledgement at once, anything else off
+/// the async executor, since a command may restart the simulation's threads
+/// (stopping and joining them), which must not stall the other connections
+/// (issue 16).
+async fn handle_text(app: &Arc<AppState>, conn: &mut Conn, text: &str) -> Vec<Message> {
+    let decoded = decode_client(text, &app.control.limits());
+    if let Ok(ClientMessage::Viewer(ViewerCommand::Ack { seq })) = decoded {
+        // Only what was sent can be acknowledged.
+        conn.acked = conn.acked.max(seq.min(conn.sent));
+        return Vec::new();
+    }
+    if let Ok(ClientMessage::Viewer(ViewerCommand::ImageAck)) = decoded {
+        conn.image_pending = false;
+        return Vec::new();
+    }
+    let claim = matches!(
+        decoded,
+        Ok(ClientMessage::Viewer(ViewerCommand::TakeControl))
+    );
+    if decoded.is_ok() && !app.drives(conn.id, claim) {
+        return vec![json(ServerMessage::Error {
+            message: "this tab only observes: another tab drives the probe (close it, then take control here)".into(),
+        })];
+    }
+    let app = app.clone();
+    tokio::task::spawn_blocking(move || reply(&app, decoded))
+        .await
+        .unwrap_or_else(|e| {
+            tracing::error!("a page command failed: {e}");
+            vec![json(ServerMessage::Error {
+                message: format!("the command failed inside the server: {e}"),
+            })]
+        })
+}
+
 /// One connection: hello, then state pushes and commands until it closes.
 async fn session(mut socket: WebSocket, app: Arc<AppState>) {
+    let watch = PageWatch::new(app.clone());
     let hello = ServerMessage::Hello {
         mesh: app.control.mesh(),
         state_rate: app.config.state_rate,
@@ -230,20 +364,21 @@ async fn session(mut socket: WebSocket, app: Arc<AppState>) {
     let period = Duration::from_secs_f64(1.0 / app.config.state_rate.clamp(1.0, 120.0));
     let mut tick = tokio::time::interval(period);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
-    let mut snap = LiveSnapshot::default();
-    let mut pixels = Vec::new();
-    let mut last_frame = None;
+    let mut ping = tokio::time::interval(app.config.idle_timeout / 3);
+    ping.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    let mut conn = Conn::new(watch.1);
     loop {
         let outgoing: Vec<Message> = tokio::select! {
             incoming = socket.recv() => match incoming {
                 None | Some(Err(_)) | Some(Ok(Message::Close(_))) => break,
-                Some(Ok(Message::Text(text))) => reply(&app, decode_client(text.as_str())),
+                Some(Ok(Message::Text(text))) => handle_text(&app, &mut conn, text.as_str()).await,
                 Some(Ok(Message::Binary(_))) => {
                     reply(&app, Err(super::protocol::ProtocolError::Binary))
                 }
                 Some(Ok(Message::Ping(_) | Message::Pong(_))) => Vec::new(),
             },
-            _ = tick.tick() => push(&app, &mut snap, &mut pixels, &mut last_frame),
+            _ = tick.tick() => push(&app, &mut conn),
+            _ = ping.tick() => vec![Message::Ping(Default::default())],
         };
         for m in outgoing {
             if socket.send(m).await.is_err() {
@@ -270,24 +405,37 @@ fn reply(
     }
 }
 
-/// The messages of one state push: scalars, surface and a new image if any.
-fn push(
-    app: &AppState,
-    snap: &mut LiveSnapshot,
-    pixels: &mut Vec<u8>,
-    last_frame: &mut Option<u64>,
-) -> Vec<Message> {
-    app.control.snapshot(snap);
-    let mut out = vec![json(ServerMessage::State(app.view_state(snap)))];
-    let mut surface = Vec::new();
-    encode_surface(snap, &mut surface);
-    out.push(Message::Binary(surface.into()));
-    let (w, h, frame) = app.control.image(pixels);
-    if *last_frame != Some(frame) && w > 0 && h > 0 {
-        *last_frame = Some(frame);
-        let mut image = Vec::new();
-        encode_image(w, h, pixels, &mut image);
-        out.push(Message::Binary(image.into()));
+/// The messages of one state push, latest wins: nothing while [`CREDIT`]
+/// states are unacknowledged or the byte budget is spent; else the state,
+/// then the surface nodes that moved and — once the page has shown the
+/// previous image ([`ViewerCommand::ImageAck`]) — the newest image, while
+/// the budget lasts.
+fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
+    conn.budget.refill(conn.epoch.elapsed().as_secs_f64());
+    if conn.sent - conn.acked >= CREDIT || !conn.budget.allows() {
+        return Vec::new();
+    }
+    app.control.snapshot(&mut conn.snap);
+    conn.sent += 1;
+    let mut state = app.view_state(&conn.snap);
+    state.seq = conn.sent;
+    state.observer = !app.drives(conn.id, false);
+    let state = json(ServerMessage::State(state));
+    conn.budget.spend(state.to_text().map_or(0, str::len));
+    let mut out = vec![state];
+    if conn.budget.allows() {
+        if let Some(surface) = conn.wire.surface(&conn.snap) {
+            conn.budget.spend(surface.len());
+            out.push(Message::Binary(surface.into()));
+        }
+    }
+    if conn.budget.allows() && !conn.image_pending {
+        let info = app.control.image(&mut conn.pixels);
+        if let Some(image) = conn.wire.image(info, &conn.pixels) {
+            conn.budget.spend(image.len());
+            conn.image_pending = true;
+            out.push(Message::Binary(image.into()));
+        }
     }
     out
 }

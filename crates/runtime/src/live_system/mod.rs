@@ -16,16 +16,19 @@ mod publish;
 mod session;
 mod shared;
 
-use crate::live::{CouplingMode, LiveCommand, LiveControl, LiveMesh, LiveSnapshot, VeinKind};
+use crate::live::{
+    CommandLimits, CouplingMode, ImageInfo, LiveCommand, LiveControl, LiveMesh, LiveSnapshot,
+    VeinState,
+};
 use crate::physics_side::PhysicsSide;
 use crate::scenario::Scenario;
-use anyhow::Result;
-use echothigh_imaging::{SectionDeformation, VeinState};
+use anyhow::{Context, Result};
+use echothigh_imaging::SectionDeformation;
 use nalgebra::{UnitQuaternion, Vector3};
-use publish::spawn_imaging;
+use publish::ImagingThread;
 use session::{start_session, Carried, Session};
 use shared::{vein_code, vein_of, HandTarget, ImageInput, ImageSlot, Shared};
-use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 
 struct Inner {
@@ -33,7 +36,15 @@ struct Inner {
     session: Option<Session>,
     exam: bool,
     target: HandTarget,
+    /// Where the page last placed the probe: (theta, z, tilt) (rad, m, rad).
+    placement: (f64, f64, f64),
 }
+
+/// Height of the lifted probe above the rest skin (m, a negative depth): a
+/// reset or a new question starts with the probe off the thigh, so the
+/// force starts at zero and rises only as the trainee presses again (issue
+/// 19: restarting pressed in gave 13–46 N spikes).
+pub const LIFTED_DEPTH: f64 = -0.02;
 
 /// What a restart keeps of the stopped session's state.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -47,10 +58,39 @@ enum Keep {
     ThighAndProbe,
 }
 
+/// The settings a snapshot reports, kept apart from [`Inner`] so that a
+/// snapshot never waits for a restart that holds `Inner` (issue 16: a mode
+/// change must not stall the pages).
+#[derive(Debug, Clone, Copy)]
+struct Settings {
+    mode: CouplingMode,
+    physics_rate: f64,
+    latency: f64,
+    exam: bool,
+    max_force: f64,
+    limits: CommandLimits,
+}
+
+impl Settings {
+    fn of(inner: &Inner) -> Self {
+        let s = &inner.scenario;
+        Settings {
+            mode: s.coupling.mode,
+            physics_rate: s.coupling.physics_rate,
+            latency: s.link.latency,
+            exam: inner.exam,
+            max_force: s.device.max_force / s.device.force_scale,
+            limits: limits_of(s),
+        }
+    }
+}
+
 /// The live system (see the module docs).
 pub struct LiveSystem {
     shared: Arc<Shared>,
     inner: Mutex<Inner>,
+    settings: Mutex<Settings>,
+    imaging: Mutex<Option<ImagingThread>>,
 }
 
 /// The hand target for a probe placed at `theta` (rad, 0 = top, positive
@@ -68,6 +108,14 @@ fn target_on_surface(s: &Scenario, theta: f64, z: f64, depth: f64, tilt: f64) ->
     HandTarget {
         position: p.into(),
         orientation: [q.w, q.i, q.j, q.k],
+    }
+}
+
+/// The command ranges of `s` ([`LiveCommand::validate`]).
+pub fn limits_of(s: &Scenario) -> CommandLimits {
+    CommandLimits {
+        half_length: 0.5 * s.thigh.length,
+        max_physics_rate: s.coupling.haptic_rate,
     }
 }
 
@@ -107,19 +155,27 @@ impl LiveSystem {
                 width: img.columns as u32,
                 height: img.rows as u32,
                 frame: 0,
+                time: 0.0,
             }),
             vein: AtomicU8::new(vein_code(scenario.patient.vein)),
             haptic: Mutex::new(None),
+            watchers: AtomicUsize::new(0),
+            fault: Mutex::new(None),
         });
-        let target = target_on_surface(&scenario, 0.0, 0.0, -0.02, 0.0);
+        let target = target_on_surface(&scenario, 0.0, 0.0, LIFTED_DEPTH, 0.0);
+        let imaging = ImagingThread::spawn(shared.clone(), &scenario)?;
+        let inner = Inner {
+            scenario,
+            session: None,
+            exam: false,
+            target,
+            placement: (0.0, 0.0, 0.0),
+        };
         let system = Arc::new(LiveSystem {
             shared,
-            inner: Mutex::new(Inner {
-                scenario,
-                session: None,
-                exam: false,
-                target,
-            }),
+            settings: Mutex::new(Settings::of(&inner)),
+            inner: Mutex::new(inner),
+            imaging: Mutex::new(Some(imaging)),
         });
         {
             let mut inner = system
@@ -128,17 +184,14 @@ impl LiveSystem {
                 .map_err(|_| anyhow::anyhow!("live state poisoned"))?;
             system.restart(&mut inner, Keep::Nothing)?;
         }
-        spawn_imaging(system.shared.clone(), system.inner_scenario()?)?;
         Ok(system)
     }
 
-    fn inner_scenario(&self) -> Result<Scenario> {
-        Ok(self
-            .inner
-            .lock()
-            .map_err(|_| anyhow::anyhow!("live state poisoned"))?
-            .scenario
-            .clone())
+    /// Publishes the settings of `inner` for snapshots.
+    fn publish_settings(&self, inner: &Inner) {
+        if let Ok(mut s) = self.settings.lock() {
+            *s = Settings::of(inner);
+        }
     }
 
     /// Stops the running threads (if any) and starts new ones with the
@@ -150,6 +203,9 @@ impl LiveSystem {
             Keep::Thigh => carried.device = None,
             Keep::ThighAndProbe => {}
         }
+        if let Ok(mut f) = self.shared.fault.lock() {
+            *f = None;
+        }
         inner.session = Some(start_session(
             &self.shared,
             &inner.scenario,
@@ -160,12 +216,22 @@ impl LiveSystem {
         Ok(())
     }
 
-    /// Stops every thread of the session.
-    pub fn shutdown(&self) {
+    /// Stops every thread (the session's, then the imaging thread) and
+    /// joins them; returns the imaging thread's error, if it had one (the
+    /// session's threads report theirs as they stop). Idempotent.
+    pub fn shutdown(&self) -> Result<()> {
         if let Ok(mut inner) = self.inner.lock() {
             if let Some(s) = inner.session.take() {
                 s.stop();
             }
+        }
+        let imaging = match self.imaging.lock() {
+            Ok(mut i) => i.take(),
+            Err(_) => None,
+        };
+        match imaging {
+            Some(t) => t.stop().context("the imaging thread"),
+            None => Ok(()),
         }
     }
 }
@@ -179,17 +245,15 @@ impl LiveControl for LiveSystem {
         if let Ok(s) = self.shared.snapshot.lock() {
             out.clone_from(&s);
         }
-        if let Ok(inner) = self.inner.lock() {
-            let c = &inner.scenario.coupling;
-            out.status.mode = Some(c.mode);
-            out.status.physics_rate_setting = c.physics_rate;
-            out.status.latency_setting = inner.scenario.link.latency;
-            out.status.exam_playing = inner.exam;
-            out.status.max_force =
-                inner.scenario.device.max_force / inner.scenario.device.force_scale;
-            if c.mode == CouplingMode::Direct {
-                out.status.physics_rate = c.haptic_rate;
-            }
+        if let Ok(s) = self.settings.lock() {
+            out.status.mode = Some(s.mode);
+            out.status.physics_rate_setting = s.physics_rate;
+            out.status.latency_setting = s.latency;
+            out.status.exam_playing = s.exam;
+            out.status.max_force = s.max_force;
+        }
+        if let Ok(f) = self.shared.fault.lock() {
+            out.fault.clone_from(&f);
         }
         if let Ok(mut h) = self.shared.haptic.lock() {
             if let Some(o) = h.as_mut() {
@@ -210,24 +274,52 @@ impl LiveControl for LiveSystem {
                 };
             }
         }
+        if out.status.mode == Some(CouplingMode::Direct) {
+            // The physics steps in the haptic loop: its achieved rate is the
+            // loop's, not the setting (issue 19: "1000 Hz" shown at 652).
+            out.status.physics_rate = out.status.haptic_rate;
+        }
     }
 
-    fn image(&self, out: &mut Vec<u8>) -> (u32, u32, u64) {
+    fn image(&self, out: &mut Vec<u8>) -> ImageInfo {
         match self.shared.image.lock() {
             Ok(s) => {
                 out.clone_from(&s.pixels);
-                (s.width, s.height, s.frame)
+                ImageInfo {
+                    width: s.width,
+                    height: s.height,
+                    frame: s.frame,
+                    time: s.time,
+                }
             }
-            Err(_) => (0, 0, 0),
+            Err(_) => ImageInfo::default(),
         }
     }
 
-    fn vein(&self) -> VeinKind {
-        match vein_of(self.shared.vein.load(Ordering::Relaxed)) {
-            VeinState::Healthy => VeinKind::Healthy,
-            VeinState::Acute => VeinKind::Acute,
-            VeinState::Chronic => VeinKind::Chronic,
+    fn vein(&self) -> VeinState {
+        vein_of(self.shared.vein.load(Ordering::Relaxed))
+    }
+
+    fn limits(&self) -> CommandLimits {
+        match self.settings.lock() {
+            Ok(s) => s.limits,
+            Err(_) => limits_of(&Scenario::default()),
         }
+    }
+
+    fn page_opened(&self) {
+        self.shared.watchers.fetch_add(1, Ordering::AcqRel);
+        if let Ok(Some(t)) = self.imaging.lock().as_deref() {
+            t.wake();
+        }
+    }
+
+    fn page_closed(&self) {
+        // Saturating: an unpaired close leaves the count at 0.
+        let _ = self
+            .shared
+            .watchers
+            .fetch_update(Ordering::AcqRel, Ordering::Acquire, |n| n.checked_sub(1));
     }
 
     fn command(&self, cmd: LiveCommand) -> Result<(), String> {
@@ -235,13 +327,18 @@ impl LiveControl for LiveSystem {
             .inner
             .lock()
             .map_err(|_| "live state poisoned".to_string())?;
-        let finite = |name: &str, v: f64, lo: f64, hi: f64| -> Result<(), String> {
-            if v.is_finite() && (lo..=hi).contains(&v) {
-                Ok(())
-            } else {
-                Err(format!("{name} must be in [{lo}, {hi}], got {v}"))
-            }
-        };
+        cmd.validate(&limits_of(&inner.scenario))
+            .map_err(|e| e.to_string())?;
+        let applied = self.apply(&mut inner, cmd);
+        self.publish_settings(&inner);
+        applied
+    }
+}
+
+impl LiveSystem {
+    /// Applies a validated command to `inner` (restarting the threads for a
+    /// change of settings).
+    fn apply(&self, inner: &mut Inner, cmd: LiveCommand) -> Result<(), String> {
         let restart = |this: &Self, inner: &mut Inner, keep| {
             this.restart(inner, keep).map_err(|e| format!("{e:#}"))
         };
@@ -252,13 +349,9 @@ impl LiveControl for LiveSystem {
                 depth,
                 tilt,
             } => {
-                finite("theta", theta, -std::f64::consts::PI, std::f64::consts::PI)?;
-                let half = 0.5 * inner.scenario.thigh.length;
-                finite("z", z, -half, half)?;
-                finite("depth", depth, -0.05, 0.04)?;
-                finite("tilt", tilt, -0.6, 0.6)?;
                 let t = target_on_surface(&inner.scenario, theta, z, depth, tilt);
                 inner.target = t;
+                inner.placement = (theta, z, tilt);
                 if inner.exam {
                     return Err("the scripted exam is playing: stop it to drive the probe".into());
                 }
@@ -278,39 +371,36 @@ impl LiveControl for LiveSystem {
             }
             LiveCommand::PlayExam => {
                 inner.exam = true;
-                restart(self, &mut inner, Keep::Thigh)
+                restart(self, inner, Keep::Thigh)
             }
             LiveCommand::StopExam => {
                 inner.exam = false;
-                restart(self, &mut inner, Keep::ThighAndProbe)
+                restart(self, inner, Keep::ThighAndProbe)
             }
             LiveCommand::SetVein { vein } => {
-                let v = match vein {
-                    VeinKind::Healthy => VeinState::Healthy,
-                    VeinKind::Acute => VeinState::Acute,
-                    VeinKind::Chronic => VeinState::Chronic,
-                };
-                inner.scenario.patient.vein = v;
-                self.shared.vein.store(vein_code(v), Ordering::Relaxed);
+                inner.scenario.patient.vein = vein;
+                self.shared.vein.store(vein_code(vein), Ordering::Relaxed);
                 Ok(())
             }
             LiveCommand::SetMode { mode } => {
                 inner.scenario.coupling.mode = mode;
-                restart(self, &mut inner, Keep::ThighAndProbe)
+                restart(self, inner, Keep::ThighAndProbe)
             }
             LiveCommand::SetPhysicsRate { hz } => {
-                finite("hz", hz, 10.0, inner.scenario.coupling.haptic_rate)?;
                 inner.scenario.coupling.physics_rate = hz;
-                restart(self, &mut inner, Keep::ThighAndProbe)
+                restart(self, inner, Keep::ThighAndProbe)
             }
             LiveCommand::SetLatency { seconds } => {
-                finite("seconds", seconds, 0.0, 0.2)?;
                 inner.scenario.link.latency = seconds;
-                restart(self, &mut inner, Keep::ThighAndProbe)
+                restart(self, inner, Keep::ThighAndProbe)
             }
             LiveCommand::Reset => {
                 inner.exam = false;
-                restart(self, &mut inner, Keep::Nothing)
+                // Lifted above where it was: the new session starts with
+                // the device at its target, out of contact.
+                let (theta, z, tilt) = inner.placement;
+                inner.target = target_on_surface(&inner.scenario, theta, z, LIFTED_DEPTH, tilt);
+                restart(self, inner, Keep::Nothing)
             }
         }
     }
@@ -318,6 +408,8 @@ impl LiveControl for LiveSystem {
 
 impl Drop for LiveSystem {
     fn drop(&mut self) {
-        self.shutdown();
+        if let Err(e) = self.shutdown() {
+            tracing::error!("stopping the live system: {e:#}");
+        }
     }
 }

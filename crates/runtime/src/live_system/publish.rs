@@ -6,13 +6,16 @@ use crate::physics_side::{self, PhysicsSide};
 use crate::scenario::Scenario;
 use crate::section::{lateral_offset, section_deformation, SectionScratch};
 use anyhow::{Context, Result};
-use echothigh_imaging::{Anatomy, FrameInput, Renderer, SectionDeformation, VeinState};
+use echothigh_imaging::{
+    Anatomy, FrameInput, ImagingConfig, Renderer, SectionDeformation, VeinState,
+};
 use echothigh_model::ThighGeometry;
 use echothigh_transport::ProbeMsg;
 use nalgebra::Isometry3;
-use std::sync::atomic::Ordering;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
-use std::time::Duration;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
 
 /// Copies the physics state into the shared snapshot and image input,
 /// never waiting for a lock.
@@ -106,65 +109,109 @@ impl Publisher {
     }
 }
 
-/// The imaging thread: renders the section under the probe at ~20 frames/s.
-pub(super) fn spawn_imaging(shared: Arc<Shared>, scenario: Scenario) -> Result<()> {
-    let cfg = scenario.imaging_config();
-    std::thread::Builder::new()
-        .name("imaging".into())
-        .spawn(move || {
-            let mut vein = shared.vein.load(Ordering::Relaxed);
-            let mut renderer = match Renderer::new(&cfg, vein_of(vein)) {
-                Ok(r) => r,
-                Err(e) => {
-                    tracing::error!("imaging disabled: {e}");
-                    return;
+/// The imaging thread: renders the section under the probe at ~20 frames/s
+/// while a page looks ([`Shared::watchers`] > 0) and sleeps otherwise.
+pub(super) struct ImagingThread {
+    stop: Arc<AtomicBool>,
+    handle: JoinHandle<Result<()>>,
+}
+
+impl ImagingThread {
+    /// Starts rendering `scenario`'s section from `shared`'s image input.
+    pub(super) fn spawn(shared: Arc<Shared>, scenario: &Scenario) -> Result<Self> {
+        let cfg = scenario.imaging_config();
+        let stop = Arc::new(AtomicBool::new(false));
+        let st = stop.clone();
+        let handle = std::thread::Builder::new()
+            .name("imaging".into())
+            .spawn(move || {
+                let r = imaging_loop(&shared, &cfg, &st);
+                if let Err(e) = &r {
+                    shared.report_fault("imaging", e);
                 }
-            };
-            let mut local = SectionDeformation::rest(0.04);
-            let mut pixels = vec![0u8; cfg.columns * cfg.rows];
-            // A fixed-rate schedule: the render's own time does not
-            // lengthen the period (a late frame starts the next period now).
-            let period = Duration::from_millis(50);
-            let mut next = std::time::Instant::now();
-            loop {
-                if Arc::strong_count(&shared) == 1 {
-                    return;
-                }
-                let v = shared.vein.load(Ordering::Relaxed);
-                if v != vein {
-                    if let Ok(r) = Renderer::new(&cfg, vein_of(v)) {
-                        renderer = r;
-                        vein = v;
-                    }
-                }
-                let (pressure, time, lateral_offset) = match shared.image_input.lock() {
-                    Ok(i) => {
-                        local.clone_from(&i.deformation);
-                        (i.pressure, i.time, i.lateral_offset)
-                    }
-                    Err(_) => return,
-                };
-                let input = FrameInput {
-                    deformation: &local,
-                    probe_pressure: pressure,
-                    time,
-                    lateral_offset,
-                };
-                if renderer.render_into(&input, &mut pixels).is_ok() {
-                    if let Ok(mut slot) = shared.image.lock() {
-                        slot.pixels.copy_from_slice(&pixels);
-                        slot.frame += 1;
-                    }
-                }
-                next += period;
-                let now = std::time::Instant::now();
-                if next > now {
-                    std::thread::sleep(next - now);
-                } else {
-                    next = now;
-                }
-            }
-        })
-        .context("starting the imaging thread")?;
+                r
+            })
+            .context("starting the imaging thread")?;
+        Ok(Self { stop, handle })
+    }
+
+    /// Wakes the thread (a page opened, or it must stop).
+    pub(super) fn wake(&self) {
+        self.handle.thread().unpark();
+    }
+
+    /// Signals the thread to stop, joins it and returns its error, if any.
+    pub(super) fn stop(self) -> Result<()> {
+        self.stop.store(true, Ordering::Release);
+        self.wake();
+        match self.handle.join() {
+            Ok(r) => r,
+            Err(_) => Err(anyhow::anyhow!("the imaging thread panicked")),
+        }
+    }
+}
+
+/// How long the idle imaging thread sleeps between looks at its stop flag
+/// when nobody unparks it (s); a page opening or a stop unparks it at once.
+const IDLE_NAP: Duration = Duration::from_millis(200);
+
+/// The imaging thread's body: until `stop`, render a frame every 50 ms
+/// while a page looks, park while none does.
+fn imaging_loop(shared: &Shared, cfg: &ImagingConfig, stop: &AtomicBool) -> Result<()> {
+    let mut vein = shared.vein.load(Ordering::Relaxed);
+    let mut renderer =
+        Renderer::new(cfg, vein_of(vein)).map_err(|e| anyhow::anyhow!("imaging: {e}"))?;
+    let mut local = SectionDeformation::rest(0.04);
+    let mut pixels = vec![0u8; cfg.columns * cfg.rows];
+    // A fixed-rate schedule: the render's own time does not lengthen the
+    // period (a late frame starts the next period now).
+    let period = Duration::from_millis(50);
+    let mut next = Instant::now();
+    while !stop.load(Ordering::Acquire) {
+        if shared.watchers.load(Ordering::Acquire) == 0 {
+            std::thread::park_timeout(IDLE_NAP);
+            next = Instant::now();
+            continue;
+        }
+        let v = shared.vein.load(Ordering::Relaxed);
+        if v != vein {
+            renderer = Renderer::new(cfg, vein_of(v))
+                .map_err(|e| anyhow::anyhow!("imaging the new vein state: {e}"))?;
+            vein = v;
+        }
+        let (pressure, time, lateral_offset) = {
+            let i = shared
+                .image_input
+                .lock()
+                .map_err(|_| anyhow::anyhow!("imaging: the physics' image input is poisoned"))?;
+            local.clone_from(&i.deformation);
+            (i.pressure, i.time, i.lateral_offset)
+        };
+        let input = FrameInput {
+            deformation: &local,
+            probe_pressure: pressure,
+            time,
+            lateral_offset,
+        };
+        renderer
+            .render_into(&input, &mut pixels)
+            .map_err(|e| anyhow::anyhow!("imaging: rendering a frame: {e}"))?;
+        {
+            let mut slot = shared
+                .image
+                .lock()
+                .map_err(|_| anyhow::anyhow!("imaging: the image slot is poisoned"))?;
+            slot.pixels.copy_from_slice(&pixels);
+            slot.frame += 1;
+            slot.time = time;
+        }
+        next += period;
+        let now = Instant::now();
+        if next > now {
+            std::thread::park_timeout(next - now);
+        } else {
+            next = now;
+        }
+    }
     Ok(())
 }

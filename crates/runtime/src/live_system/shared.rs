@@ -3,7 +3,7 @@
 
 use crate::live::{LiveMesh, LiveSnapshot};
 use echothigh_imaging::{SectionDeformation, VeinState};
-use std::sync::atomic::AtomicU8;
+use std::sync::atomic::{AtomicU8, AtomicUsize};
 use std::sync::Mutex;
 
 /// Where the hand wants the probe.
@@ -56,6 +56,8 @@ pub(super) struct ImageSlot {
     pub height: u32,
     /// Frames rendered so far.
     pub frame: u64,
+    /// Simulated time of the physics state the frame shows (s).
+    pub time: f64,
 }
 
 /// What the threads share (the real-time side only `try_lock`s).
@@ -72,6 +74,22 @@ pub(super) struct Shared {
     pub vein: AtomicU8,
     /// The haptic loop's status handoff of the running session.
     pub haptic: Mutex<Option<triple_buffer::Output<HapticStatus>>>,
+    /// Pages looking at the live state (the imaging thread idles at 0).
+    pub watchers: AtomicUsize,
+    /// The last error of a thread of the live system, for the page; cleared
+    /// when a new session starts.
+    pub fault: Mutex<Option<String>>,
+}
+
+impl Shared {
+    /// Reports `thread`'s error: logged, and kept for the page's status.
+    /// Never called on the haptic tick's path except when the loop stops.
+    pub fn report_fault(&self, thread: &str, error: &anyhow::Error) {
+        tracing::error!("live {thread} thread stopped: {error:#}");
+        if let Ok(mut f) = self.fault.lock() {
+            *f = Some(format!("the {thread} thread stopped: {error:#}"));
+        }
+    }
 }
 
 /// The vein state as stored in [`Shared::vein`].

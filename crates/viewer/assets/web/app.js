@@ -8,6 +8,9 @@ import { EchoView, ForcePlot, Gauge, norm, showStatus } from './panels.js';
 const PROTOCOL_VERSION = 1;
 const FRAME_IMAGE = 1;
 const FRAME_SURFACE = 2;
+const FRAME_IMAGE_PNG = 3; // f64 time, then a gray PNG
+const FRAME_IMAGE_DELTA = 4; // f64 time, then a PNG of (new − old) mod 256
+const FRAME_SURFACE_DELTA = 5; // a changed of b nodes: u32 indices, 3a f32 positions, a f32 compressions
 const DEPTH_STEP = 0.0005; // m per wheel notch or key press
 const MAX_DEPTH = 0.035; // m, below the server's limit
 const TILT_STEP = 0.05; // rad
@@ -18,7 +21,10 @@ const $ = (id) => document.getElementById(id);
 // What the page knows, readable by tests and the console.
 const live = {
   connected: false, hello: null, state: null, lastError: null, errors: 0,
-  imageFrames: 0, surfaceFrames: 0,
+  imageFrames: 0, surfaceFrames: 0, imageTime: null, bytes: 0,
+  // Called as fn(kind, performance.now(), detail) on every state ('state',
+  // the message) and image ('image', its simulated time): for measurements.
+  listeners: [],
   // Arrival times (ms, performance.now) of the last 300 states, images and rendered frames.
   arrivals: { state: [], image: [], render: [] }, probe: { theta: 0, z: 0, depth: 0.008, tilt: 0, placed: false },
 };
@@ -47,7 +53,14 @@ function connect() {
   ws.binaryType = 'arraybuffer';
   ws.onopen = () => { live.connected = true; setConn(true); };
   ws.onclose = () => { live.connected = false; setConn(false); setTimeout(connect, 1000); };
-  ws.onmessage = (ev) => (typeof ev.data === 'string' ? onJson(ev.data) : onFrame(ev.data));
+  ws.onmessage = (ev) => {
+    if (typeof ev.data === 'string') { live.bytes += ev.data.length; onJson(ev.data); }
+    else { live.bytes += ev.data.byteLength; onFrame(ev.data); }
+  };
+}
+function notify(kind, detail) {
+  const now = performance.now();
+  for (const f of live.listeners) f(kind, now, detail);
 }
 function setConn(on) {
   $('conn').textContent = on ? 'live' : 'disconnected — retrying';
@@ -79,20 +92,77 @@ function onFrame(buf) {
   if (magic !== 'ETHV' || head.getUint8(4) !== PROTOCOL_VERSION) return;
   const kind = head.getUint8(5), a = head.getUint32(8, true), b = head.getUint32(12, true);
   if (kind === FRAME_IMAGE && buf.byteLength === 16 + a * b) {
-    echo.draw(a, b, new Uint8Array(buf, 16, a * b));
-    live.imageFrames += 1;
-    stamp(live.arrivals.image);
+    showImage(a, b, new Uint8Array(buf.slice(16)), null);
   } else if (kind === FRAME_SURFACE && buf.byteLength === 16 + 16 * a) {
-    if (scene) scene.updateSurface(new Float32Array(buf, 16, 3 * a), new Float32Array(buf, 16 + 12 * a, a));
-    live.surfaceFrames += 1;
+    surface.pos = new Float32Array(buf.slice(16, 16 + 12 * a));
+    surface.comp = new Float32Array(buf.slice(16 + 12 * a));
+    showSurface();
+  } else if (kind === FRAME_SURFACE_DELTA && buf.byteLength === 16 + 20 * a && a <= b) {
+    if (!surface.pos || surface.comp.length !== b) {
+      surface.pos = new Float32Array(3 * b); surface.comp = new Float32Array(b);
+    }
+    const idx = new Uint32Array(buf.slice(16, 16 + 4 * a));
+    const pos = new Float32Array(buf.slice(16 + 4 * a, 16 + 16 * a));
+    const comp = new Float32Array(buf.slice(16 + 16 * a));
+    for (let j = 0; j < a; j++) {
+      const i = idx[j];
+      surface.pos[3 * i] = pos[3 * j]; surface.pos[3 * i + 1] = pos[3 * j + 1]; surface.pos[3 * i + 2] = pos[3 * j + 2];
+      surface.comp[i] = comp[j];
+    }
+    showSurface();
+  } else if ((kind === FRAME_IMAGE_PNG || kind === FRAME_IMAGE_DELTA) && buf.byteLength > 24) {
+    const time = new DataView(buf, 16, 8).getFloat64(0, true);
+    const png = new Blob([new Uint8Array(buf, 24)], { type: 'image/png' });
+    // Decoded in arrival order: a delta applies to the image before it.
+    imageChain = imageChain.then(() => decodeGray(png, a, b)).then((px) => {
+      if (kind === FRAME_IMAGE_PNG) gray = px;
+      else if (gray && gray.length === px.length) for (let i = 0; i < px.length; i++) gray[i] = (gray[i] + px[i]) & 255;
+      else return; // a delta without its key frame (cannot happen on one connection)
+      showImage(a, b, gray, time);
+    }).catch((e) => toast(`image: ${e.message}`))
+      // Flow control: the server sends the next image once this one is shown.
+      .finally(() => send({ type: 'image_ack' }));
   }
+}
+
+// The surface and the image as the page holds them (the wire sends changes).
+const surface = { pos: null, comp: null };
+let gray = null;
+let imageChain = Promise.resolve();
+function showSurface() {
+  if (scene) scene.updateSurface(surface.pos, surface.comp);
+  live.surfaceFrames += 1;
+}
+function showImage(w, h, px, time) {
+  echo.draw(w, h, px);
+  live.imageFrames += 1;
+  live.imageTime = time;
+  stamp(live.arrivals.image);
+  notify('image', time);
+}
+const grayCanvas = new OffscreenCanvas(1, 1);
+const grayCtx = grayCanvas.getContext('2d', { willReadFrequently: true });
+/** The gray levels of an 8-bit gray PNG, exactly (no colour management). */
+async function decodeGray(blob, w, h) {
+  const bmp = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+  if (bmp.width !== w || bmp.height !== h) throw new Error(`PNG of ${bmp.width}×${bmp.height}, header ${w}×${h}`);
+  grayCanvas.width = w; grayCanvas.height = h;
+  grayCtx.drawImage(bmp, 0, 0);
+  bmp.close();
+  const rgba = grayCtx.getImageData(0, 0, w, h).data;
+  const px = new Uint8Array(w * h);
+  for (let i = 0, j = 0; i < px.length; i++, j += 4) px[i] = rgba[j];
+  return px;
 }
 
 // ---- state ---------------------------------------------------------------
 let renderedFps = 0;
 function onState(s) {
   live.state = s;
+  // Flow control: the server sends the next state once this one is taken.
+  send({ type: 'ack', seq: s.seq });
   stamp(live.arrivals.state);
+  notify('state', s);
   const rendered = norm(s.rendered_force), physics = norm(s.physics_force);
   plot.push(s.time, rendered, physics);
   gauge.update(rendered, s.max_force);
@@ -100,6 +170,21 @@ function onState(s) {
   showStatus(s, renderedFps);
   syncControls(s);
   showExam(s.exam);
+  $('observer').hidden = !s.observer;
+  showBehind(s);
+}
+
+/** Says so when the simulation runs slower than set (achieved rates). */
+function showBehind(s) {
+  const late = [];
+  // Haptics: the device loop runs at 1 kHz; below 900 Hz the feel degrades.
+  if (s.haptic_rate > 0 && s.haptic_rate < 900) late.push(`touch feedback at ${s.haptic_rate.toFixed(0)} Hz of 1000`);
+  // Physics: below 80 % of its setting the buffer model ages visibly.
+  if (s.physics_rate > 0 && s.physics_rate < 0.8 * s.physics_rate_setting && s.mode !== 'direct') {
+    late.push(`tissue simulation at ${s.physics_rate.toFixed(0)} Hz of ${s.physics_rate_setting.toFixed(0)}`);
+  }
+  $('behind').hidden = late.length === 0;
+  $('behind').textContent = late.length ? `The computer is falling behind: ${late.join(', ')}.` : '';
 }
 
 function syncControls(s) {
@@ -192,11 +277,33 @@ canvas.addEventListener('wheel', (e) => {
   if (e.shiftKey) { if (scene) scene.zoom(e.deltaY > 0 ? 1.1 : 1 / 1.1); return; }
   setDepth(live.probe.depth + (e.deltaY < 0 ? DEPTH_STEP : -DEPTH_STEP));
 }, { passive: false });
-window.addEventListener('keydown', (e) => {
-  if (e.target instanceof HTMLInputElement || e.target instanceof HTMLSelectElement) return;
+// Shortcuts act on the probe only while the 3D view has focus, never on a
+// focused control (issue 19: ↑ on the vein menu switched it to acute).
+const THETA_STEP = 0.05; // rad around the thigh per arrow press
+const Z_STEP = 0.005; // m along the thigh per arrow press
+function moveProbe(dTheta, dZ) {
+  const p = live.probe;
+  p.theta = Math.max(-Math.PI, Math.min(Math.PI, p.theta + dTheta));
+  const half = live.hello ? halfLength(live.hello.mesh) : 0.1;
+  p.z = Math.max(-half, Math.min(half, p.z + dZ));
+  if (p.placed) sendProbeSoon();
+}
+function halfLength(mesh) {
+  let m = 0;
+  for (const r of mesh.rest) m = Math.max(m, Math.abs(r[2]));
+  return 0.9 * m;
+}
+canvas.addEventListener('keydown', (e) => {
   const k = e.key.toLowerCase();
-  if (k === 'arrowup' || k === 'w') setDepth(live.probe.depth + DEPTH_STEP);
-  else if (k === 'arrowdown' || k === 's') setDepth(live.probe.depth - DEPTH_STEP);
+  if (k === 'arrowleft') moveProbe(-THETA_STEP, 0);
+  else if (k === 'arrowright') moveProbe(THETA_STEP, 0);
+  else if (k === 'arrowup') moveProbe(0, Z_STEP);
+  else if (k === 'arrowdown') moveProbe(0, -Z_STEP);
+  else if (k === 'enter') {
+    if (live.state && live.state.exam_playing) send({ type: 'stop_exam' });
+    live.probe.placed = true; sendProbeSoon();
+  } else if (k === 'w') setDepth(live.probe.depth + DEPTH_STEP);
+  else if (k === 's') setDepth(live.probe.depth - DEPTH_STEP);
   else if (k === 'q') setTilt(live.probe.tilt - TILT_STEP);
   else if (k === 'e') setTilt(live.probe.tilt + TILT_STEP);
   else if (k === 'l') lift();
@@ -221,6 +328,7 @@ $('exam-start').addEventListener('click', () => { live.probe.placed = false; sen
 $('answer-yes').addEventListener('click', () => send({ type: 'exam_answer', compressible: true }));
 $('answer-no').addEventListener('click', () => send({ type: 'exam_answer', compressible: false }));
 $('exam-stop').addEventListener('click', () => send({ type: 'exam_stop' }));
+$('take-control').addEventListener('click', () => send({ type: 'take_control' }));
 
 // ---- frame loop ----------------------------------------------------------
 let fpsWindow = { t: performance.now(), frames: 0, echo: 0 };

@@ -116,4 +116,7 @@ export function showStatus(s, fps) {
   set('st-time', `${s.time.toFixed(2)} s`);
   set('st-fps', `${fps.toFixed(0)} frames/s`);
   set('st-vein', s.vein ?? 'hidden (exam)');
+  const fault = document.getElementById('fault');
+  fault.hidden = !s.fault;
+  fault.textContent = s.fault ? `Simulation stopped: ${s.fault}. Press Reset to restart it.` : '';
 }

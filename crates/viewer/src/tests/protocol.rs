@@ -3,9 +3,20 @@
 
 use super::super::protocol::*;
 use echothigh_runtime::live::{
-    CouplingMode, LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, VeinKind,
+    CouplingMode, LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, VeinState,
 };
 use proptest::prelude::*;
+
+/// The limits of the test double's thigh (0.3 m long, 1 kHz haptics).
+fn limits() -> CommandLimits {
+    use echothigh_runtime::live::LiveControl;
+    super::super::fake::FakeLive::new().limits()
+}
+
+/// [`super::super::protocol::decode_client`] against the test double's limits.
+fn decode_client(text: &str) -> Result<ClientMessage, ProtocolError> {
+    super::super::protocol::decode_client(text, &limits())
+}
 
 /// A state with every field set, an answered exam question and a visible vein.
 pub(super) fn sample_state() -> ViewState {
@@ -39,12 +50,12 @@ pub(super) fn sample_state() -> ViewState {
         last: Some(ExamResult {
             question: 2,
             answered_compressible: true,
-            truth: VeinKind::Chronic,
+            truth: VeinState::Chronic,
             correct: false,
             peak_force: 12.5,
         }),
     };
-    ViewState::from_snapshot(&snap, Some(VeinKind::Acute), exam)
+    ViewState::from_snapshot(&snap, Some(VeinState::Acute), exam)
 }
 
 #[test]
@@ -176,7 +187,7 @@ fn every_command_decodes_from_its_json() {
         LiveCommand::PlayExam,
         LiveCommand::StopExam,
         LiveCommand::SetVein {
-            vein: VeinKind::Chronic,
+            vein: VeinState::Chronic,
         },
         LiveCommand::SetMode {
             mode: CouplingMode::Direct,
@@ -208,7 +219,7 @@ fn every_command_decodes_from_its_json() {
     assert_eq!(
         decode_client(r#"{"type":"set_vein","vein":"acute"}"#),
         Ok(ClientMessage::Live(LiveCommand::SetVein {
-            vein: VeinKind::Acute
+            vein: VeinState::Acute
         }))
     );
     assert_eq!(
@@ -311,11 +322,87 @@ fn out_of_range_numbers_are_refused_naming_the_field() {
     ];
     for (text, expected) in cases {
         match refused(text) {
-            ProtocolError::OutOfRange { field, .. } => assert_eq!(field, expected, "{text}"),
+            ProtocolError::Command(CommandError::OutOfRange { field, .. }) => {
+                assert_eq!(field, expected, "{text}")
+            }
             other => panic!("{text}: {other:?}"),
         }
         assert!(refused(text).to_string().contains(expected));
     }
+}
+
+/// One validation (issue 16): a command out of range is refused by the page
+/// protocol and by the runtime's seam (here the test double, which validates
+/// through the same `LiveCommand::validate` as the live system) with the
+/// same message, naming the field, its unit and its range.
+#[test]
+fn protocol_and_runtime_refuse_the_same_commands_with_the_same_message() {
+    use echothigh_runtime::live::LiveControl;
+    let fake = super::super::fake::FakeLive::new();
+    let bad = [
+        LiveCommand::Probe {
+            theta: 3.5,
+            z: 0.0,
+            depth: 0.01,
+            tilt: 0.0,
+        },
+        LiveCommand::Probe {
+            theta: 0.0,
+            z: 0.16,
+            depth: 0.01,
+            tilt: 0.0,
+        },
+        LiveCommand::Probe {
+            theta: 0.0,
+            z: 0.0,
+            depth: 0.041,
+            tilt: 0.0,
+        },
+        LiveCommand::Probe {
+            theta: 0.0,
+            z: 0.0,
+            depth: -0.001,
+            tilt: 0.0,
+        },
+        LiveCommand::Probe {
+            theta: 0.0,
+            z: 0.0,
+            depth: 0.01,
+            tilt: -0.61,
+        },
+        LiveCommand::SetPhysicsRate { hz: 9.9 },
+        LiveCommand::SetPhysicsRate { hz: 1000.5 },
+        LiveCommand::SetLatency { seconds: 0.21 },
+    ];
+    for cmd in bad {
+        let text = serde_json::to_string(&cmd).unwrap();
+        let by_protocol = refused(&text).to_string();
+        let by_runtime = fake.command(cmd.clone()).unwrap_err();
+        assert_eq!(by_protocol, by_runtime, "{text}");
+        let field = match cmd.validate(&limits()).unwrap_err() {
+            CommandError::OutOfRange { field, .. } => field,
+        };
+        assert!(by_protocol.contains(field), "{by_protocol}");
+        assert!(by_protocol.contains("out of range ["), "{by_protocol}");
+    }
+    // Just inside every range: accepted by both.
+    let good = [
+        LiveCommand::Probe {
+            theta: -std::f64::consts::PI,
+            z: 0.15,
+            depth: 0.04,
+            tilt: 0.6,
+        },
+        LiveCommand::SetPhysicsRate { hz: 1000.0 },
+        LiveCommand::SetLatency { seconds: 0.2 },
+    ];
+    for cmd in good {
+        let text = serde_json::to_string(&cmd).unwrap();
+        assert!(decode_client(&text).is_ok(), "{text}");
+        assert_eq!(fake.command(cmd), Ok(()));
+    }
+    // Nothing refused reached the double's state.
+    assert_eq!(fake.commands().len(), 3);
 }
 
 #[test]
@@ -379,6 +466,6 @@ proptest! {
     fn probe_depth_accepted_iff_in_range(depth in -0.2f64..0.2) {
         let text = format!(r#"{{"type":"probe","theta":0.1,"z":0.0,"depth":{depth},"tilt":0.0}}"#);
         let ok = decode_client(&text).is_ok();
-        prop_assert_eq!(ok, (0.0..=MAX_DEPTH).contains(&depth));
+        prop_assert_eq!(ok, (DEPTH_RANGE.0..=DEPTH_RANGE.1).contains(&depth));
     }
 }

@@ -8,7 +8,7 @@ use super::protocol::sample_state;
 /// `msg.type` in `app.js`'s `onJson`, the rest as `s.<key>` in `onState`,
 /// `syncControls` (app.js), `showStatus` (panels.js) and `updateState`
 /// (scene.js).
-const PAGE_STATE_KEYS: [&str; 20] = [
+const PAGE_STATE_KEYS: [&str; 23] = [
     "v",
     "type",
     "time",
@@ -29,6 +29,9 @@ const PAGE_STATE_KEYS: [&str; 20] = [
     "exam_playing",
     "vein",
     "exam",
+    "observer",
+    "seq",
+    "fault",
 ];
 
 #[test]
@@ -61,7 +64,8 @@ fn state_message_top_level_keys_are_the_ones_the_page_reads() {
 #[test]
 fn state_json_is_unchanged_byte_for_byte() {
     // The exact text the page received before `ViewState` flattened
-    // `LiveStatus`: same keys, same nesting, same order.
+    // `LiveStatus`: same keys, same nesting, same order (plus `observer`,
+    // `seq` and `fault`, added last for issues 19 and 16).
     let expected = concat!(
         r#"{"v":1,"type":"state","time":1.25,"probe_position":[0.0,0.07,0.01],"#,
         r#""probe_orientation":[1.0,0.0,0.0,0.0],"device":[0.0,0.0,0.0],"#,
@@ -71,7 +75,7 @@ fn state_json_is_unchanged_byte_for_byte() {
         r#""physics_rate_setting":100.0,"latency_setting":0.02,"exam_playing":true,"#,
         r#""vein":"acute","exam":{"open":false,"question":2,"peak_force":0.0,"#,
         r#""answered":2,"correct":1,"last":{"question":2,"answered_compressible":true,"#,
-        r#""truth":"chronic","correct":false,"peak_force":12.5}}}"#
+        r#""truth":"chronic","correct":false,"peak_force":12.5}},"observer":false,"seq":0,"fault":null}"#
     );
     let text = serde_json::to_string(&Envelope::new(ServerMessage::State(sample_state()))).unwrap();
     assert_eq!(text, expected);

@@ -1,0 +1,59 @@
+//! The live system's imaging thread (issue 16/19): it renders only while a
+//! page looks, idles otherwise, and stops and is joined on shutdown. Real
+//! threads on the real clock; only frame counters are asserted, each wait
+//! bounded generously (60 s) so a loaded machine slows the test, not fails it.
+
+use echothigh_runtime::live::{LiveControl, LiveSnapshot};
+use echothigh_runtime::live_system::LiveSystem;
+use echothigh_runtime::scenario::Scenario;
+use std::time::{Duration, Instant};
+
+fn frame(system: &LiveSystem) -> u64 {
+    let mut pixels = Vec::new();
+    system.image(&mut pixels).frame
+}
+
+fn wait_until(what: &str, mut done: impl FnMut() -> bool) {
+    let start = Instant::now();
+    while !done() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "timed out: {what}"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn the_image_is_rendered_only_while_a_page_looks_and_the_thread_joins() {
+    let system = LiveSystem::start(Scenario::default()).unwrap();
+    // Nobody looks: not one frame. 0.5 s is ten frame periods (50 ms), so a
+    // thread that rendered for nobody would have counted some.
+    std::thread::sleep(Duration::from_millis(500));
+    assert_eq!(frame(&system), 0, "frames rendered with no page open");
+
+    system.page_opened();
+    wait_until("a first frame for the page", || frame(&system) >= 3);
+
+    system.page_closed();
+    // The frame under way may finish; then the counter stays put.
+    let mut last = frame(&system);
+    wait_until("the imaging to idle", || {
+        std::thread::sleep(Duration::from_millis(200));
+        let now = frame(&system);
+        std::mem::replace(&mut last, now) == now
+    });
+    std::thread::sleep(Duration::from_millis(500));
+    assert_eq!(
+        frame(&system),
+        last,
+        "frames rendered after the page closed"
+    );
+
+    let mut snap = LiveSnapshot::default();
+    system.snapshot(&mut snap);
+    assert_eq!(snap.fault, None);
+    // Joined, with no error; a second shutdown has nothing left to stop.
+    system.shutdown().unwrap();
+    system.shutdown().unwrap();
+}
