@@ -71,6 +71,20 @@ pub struct LegNode {
     pub stiffness: f64,
 }
 
+/// Where a hand holds the probe (model frame): the probe face's centre (m)
+/// and the tool's orientation (model ← tool), the tool's local `y` along
+/// the skin's outward normal (the face looks down its `−y`), local `z` the
+/// leg's proximal direction projected on the skin's tangent plane, local
+/// `x = y × z` (the image's lateral axis). At the anterior line of a
+/// straight leg this is the identity, the runtime's `EXAM_ORIENTATION`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HandTarget {
+    /// Face centre (m, model frame).
+    pub position: Vec3,
+    /// Orientation, model ← tool.
+    pub orientation: nalgebra::UnitQuaternion<f64>,
+}
+
 /// The leg of one patient, placed in the model's frame.
 #[derive(Debug, Clone)]
 pub struct LegSurface {
@@ -157,6 +171,43 @@ impl LegSurface {
             anchor: self.to_model(&anchor),
             stiffness: self.stiffness_factor(s, th),
         }
+    }
+
+    /// The hand target of a probe on the skin at `s` (m below the inguinal
+    /// ligament) and `θ_leg` (rad, 0 anterior, π/2 medial, π the popliteal
+    /// fossa), its face `depth` (m) inside the rest skin along the inward
+    /// normal (negative: above the skin), tilted by `tilt` (rad) about its
+    /// lateral axis (a positive tilt aims the beam distally). Errors name
+    /// the argument (`s` outside the leg, non-finite angles or depth).
+    pub fn hand_target(
+        &self,
+        s: f64,
+        theta_leg: f64,
+        depth: f64,
+        tilt: f64,
+    ) -> Result<HandTarget, echothigh_anatomy::AnatomyError> {
+        use echothigh_anatomy::AnatomyError::BadQuery;
+        for (what, v) in [("angle", theta_leg), ("depth", depth), ("tilt", tilt)] {
+            if !v.is_finite() {
+                let reason = "must be finite";
+                return Err(BadQuery {
+                    what,
+                    value: v,
+                    reason,
+                });
+            }
+        }
+        let p = self.anatomy.skin_point(s, theta_leg)?;
+        let n = self.anatomy.skin_normal(s, theta_leg)?;
+        let z = (Vec3::z() - n * n.z).normalize();
+        let x = n.cross(&z);
+        let frame =
+            nalgebra::Rotation3::from_matrix_unchecked(nalgebra::Matrix3::from_columns(&[x, n, z]));
+        let tilted = frame * nalgebra::Rotation3::from_axis_angle(&Vec3::x_axis(), tilt);
+        Ok(HandTarget {
+            position: self.to_model(&(p - n * depth)),
+            orientation: nalgebra::UnitQuaternion::from_rotation_matrix(&tilted),
+        })
     }
 
     /// The factor on the normal springs' stiffness at `(s, θ_leg)` (see the

@@ -39,7 +39,7 @@ pub use checkpoint::{DivergedError, MAX_POSITION, MAX_SPEED};
 pub use config::{ConfigError, IntegratorParams, ModelConfig, ThighGeometry, TissueParams};
 pub use force_model::{ForceModel, JacobianScratch, NoExtraForce, SumForce};
 pub use integrator::{Dynamics, ImplicitEuler, StepStats};
-pub use leg::{LegNode, LegSurface};
+pub use leg::{HandTarget, LegNode, LegSurface};
 pub use mesh::{Edge, EdgeKind, SurfaceMesh};
 pub use pcg::{Pcg, PcgParams, Preconditioner, SolveStats};
 pub use thigh::{Energy, ThighModel};

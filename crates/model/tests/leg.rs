@@ -190,3 +190,37 @@ fn bad_leg_keys_are_named() {
     let e = ThighModel::new(&c).unwrap_err().to_string();
     assert!(e.contains("thigh.centre_s"), "{e}");
 }
+
+/// The hand target sits on the skin along the normal, faces it, is the
+/// identity at the anterior line of the straight mid-thigh, and refuses
+/// a position beyond the leg naming it.
+#[test]
+fn hand_target_faces_the_skin() {
+    let c = leg_config("lean-male");
+    let m = ThighModel::new(&c).unwrap();
+    let leg = m.mesh().leg().unwrap();
+    let a = leg.anatomy();
+    for &(s, th) in &[
+        (0.05, 0.0),
+        (0.2, 0.6),
+        (0.3, -1.0),
+        (0.36, std::f64::consts::PI),
+    ] {
+        let t = leg.hand_target(s, th, 0.004, 0.0).unwrap();
+        let n = a.skin_normal(s, th).unwrap();
+        let skin = leg.to_model(&a.skin_point(s, th).unwrap());
+        assert!((t.position - (skin - n * 0.004)).norm() < 1e-12);
+        // The tool's +y is the outward normal; its x is transverse (⊥ z).
+        let y = t.orientation * nalgebra::Vector3::y();
+        let x = t.orientation * nalgebra::Vector3::x();
+        assert!((y - n).norm() < 1e-12 && x.z.abs() < 1e-12);
+    }
+    // Anterior line at mid-thigh: the normal is +y up to the leg's taper,
+    // dr/ds = (dC/ds)/2π with the circumference falling 0.50 → 0.41 m over
+    // s = 0.20 → 0.33 m (lean-male): a slope of ≈ 0.1 rad at most.
+    let t = leg.hand_target(0.2, 0.0, 0.0, 0.0).unwrap();
+    assert!(t.orientation.angle() < 0.1, "{}", t.orientation.angle());
+    let e = leg.hand_target(0.9, 0.0, 0.0, 0.0).unwrap_err().to_string();
+    assert!(e.contains("outside the leg"), "{e}");
+    assert!(leg.hand_target(0.2, f64::NAN, 0.0, 0.0).is_err());
+}
