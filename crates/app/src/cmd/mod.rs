@@ -4,5 +4,6 @@ pub mod anatomy;
 pub mod calibrate;
 pub mod devices;
 pub mod image;
+pub mod image_site;
 pub mod net;
 pub mod run;
