@@ -273,12 +273,19 @@ pub struct AnatomyConfig {
     /// Heart rate (Hz). Default 1.0 (60 bpm).
     /// Accepted: in 0 to 4 Hz (0 to 240 bpm).
     pub heart_rate: f64,
-    /// Tissue pressure at which the artery starts to flatten (Pa). Default 80 mmHg.
-    /// Accepted: in 0 to 1e5 Pa (750 mmHg).
+    /// Tissue pressure at which the artery starts to flatten (Pa). Default
+    /// 60 mmHg: trainees press "until the artery just begins to deform"
+    /// (cus-exam-fidelity row 5), so it must ovalise from roughly diastolic
+    /// pressure, ~60–80 mmHg (§4 item 5; with the defaults below its area is
+    /// down 6 % at 80 mmHg, 12 % at 90). Accepted: in 0 to 1e5 Pa (750 mmHg).
     pub artery_collapse_onset: f64,
-    /// Tissue pressure at which the artery reaches its smallest size (Pa). Default 300 mmHg.
+    /// Tissue pressure at which the artery reaches its smallest size (Pa).
+    /// Default 150 mmHg: "clearly oval by ~120 mmHg" (§4 item 5): area 67 %
+    /// of rest at 120 mmHg with the defaults.
     pub artery_collapse_full: f64,
-    /// Smallest artery lumen area relative to rest (dimensionless). Default 0.85.
+    /// Smallest artery lumen area relative to rest (dimensionless). Default
+    /// 0.55 (estimate: a clearly flattened but patent artery, its height
+    /// about half its width; arterial pressure keeps it open).
     /// Accepted: in [0, 1].
     pub artery_min_lumen_ratio: f64,
     /// Femur radius (m). Default 13e-3.
@@ -315,9 +322,9 @@ impl Default for AnatomyConfig {
             artery_wall_thickness: 0.7e-3,
             artery_distension: 0.07,
             heart_rate: 1.0,
-            artery_collapse_onset: 80.0 * MMHG,
-            artery_collapse_full: 300.0 * MMHG,
-            artery_min_lumen_ratio: 0.85,
+            artery_collapse_onset: 60.0 * MMHG,
+            artery_collapse_full: 150.0 * MMHG,
+            artery_min_lumen_ratio: 0.55,
             femur_radius: 13e-3,
             femur_lateral: 6e-3,
             cortex_thickness: 5e-3,

@@ -26,7 +26,12 @@ fn model_lumen_area_versus_force() {
             let artery = l.artery.area / l.artery.rest_area;
             assert!(vein <= last + 1e-12, "{state:?}: lumen grows with force");
             last = vein;
-            assert!(artery > 0.8, "{state:?} at {f} N: artery {artery}");
+            // Up to the exam force the artery keeps its shape (the tissue
+            // pressure at it stays below its 60 mmHg onset); past it, it
+            // ovalises (the pressure cue, tested in `artery_cue.rs`).
+            if f <= EXAM_FORCE {
+                assert!(artery > 0.8, "{state:?} at {f} N: artery {artery}");
+            }
             match state {
                 VeinState::Healthy if f >= EXAM_FORCE => {
                     assert!(vein < 0.1, "healthy at {f} N: {vein}")

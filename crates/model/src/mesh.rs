@@ -1,8 +1,10 @@
 //! The surface mesh of the thigh: an `n_θ × n_z` grid on the elliptic
-//! cylinder (periodic in θ), its triangles, its spring edges by kind, and the
-//! inner layer of anchors (paper §3, Fig. 2).
+//! cylinder or on a patient's tapered leg (periodic in θ; see
+//! [`crate::leg`]), its triangles, its spring edges by kind, and the inner
+//! layer of anchors (paper §3, Fig. 2).
 
 use crate::config::{ConfigError, ThighGeometry};
+use crate::leg::LegSurface;
 use crate::Vec3;
 
 /// Kind of a mesh edge carrying a linear spring.
@@ -30,7 +32,9 @@ pub struct Edge {
 /// The surface mesh: plain data, built once from a [`ThighGeometry`].
 ///
 /// Node `k` sits at grid indices `(i_θ, i_z)` with `k = i_z · n_θ + i_θ`,
-/// at angle `θ = 2π i_θ / n_θ` and height `z = −L/2 + L i_z / (n_z − 1)`.
+/// at angle `θ = 2π i_θ / n_θ` and height `z = −L/2 + L i_z / (n_z − 1)`
+/// (on the cylinder θ is the ellipse's parameter; on a leg, the polar angle
+/// around the leg's axis).
 #[derive(Debug, Clone)]
 pub struct SurfaceMesh {
     geometry: ThighGeometry,
@@ -41,28 +45,46 @@ pub struct SurfaceMesh {
     triangles: Vec<[usize; 3]>,
     edges: Vec<Edge>,
     fixed: Vec<bool>,
+    layer_scale: Vec<f64>,
+    stiffness: Vec<f64>,
+    leg: Option<LegSurface>,
 }
 
 impl SurfaceMesh {
     /// Generates the mesh; validates the geometry first (errors name `thigh.*`).
     pub fn new(geometry: &ThighGeometry) -> Result<Self, ConfigError> {
         geometry.validate("thigh")?;
+        let leg = LegSurface::new(geometry, "thigh")?;
         let (nt, nz) = (geometry.n_theta, geometry.n_z);
         let n = nt * nz;
         let idx = |it: usize, iz: usize| iz * nt + (it % nt);
         let mut rest_positions = Vec::with_capacity(n);
         let mut anchors = Vec::with_capacity(n);
         let mut rest_normals = Vec::with_capacity(n);
+        let mut layer_scale = Vec::with_capacity(n);
+        let mut stiffness = Vec::with_capacity(n);
         for iz in 0..nz {
             let z = geometry.z(iz);
             for it in 0..nt {
                 let theta = geometry.theta(it);
-                let p = geometry.surface_point(theta, z);
-                let nrm = geometry.surface_normal(theta);
-                let a = geometry.anchor_xy(theta);
-                rest_positions.push(Vec3::new(p[0], p[1], p[2]));
-                rest_normals.push(Vec3::new(nrm[0], nrm[1], nrm[2]));
-                anchors.push(Vec3::new(a[0], a[1], z));
+                if let Some(leg) = &leg {
+                    let node = leg.node(theta, z);
+                    rest_positions.push(node.position);
+                    rest_normals.push(node.normal);
+                    anchors.push(node.anchor);
+                    let rest = (node.position - node.anchor).norm();
+                    layer_scale.push(rest / geometry.tissue_thickness);
+                    stiffness.push(node.stiffness);
+                } else {
+                    let p = geometry.surface_point(theta, z);
+                    let nrm = geometry.surface_normal(theta);
+                    let a = geometry.anchor_xy(theta);
+                    rest_positions.push(Vec3::new(p[0], p[1], p[2]));
+                    rest_normals.push(Vec3::new(nrm[0], nrm[1], nrm[2]));
+                    anchors.push(Vec3::new(a[0], a[1], z));
+                    layer_scale.push(1.0);
+                    stiffness.push(1.0);
+                }
             }
         }
         let mut triangles = Vec::with_capacity(2 * nt * (nz - 1));
@@ -112,7 +134,28 @@ impl SurfaceMesh {
             triangles,
             edges,
             fixed,
+            layer_scale,
+            stiffness,
+            leg,
         })
+    }
+
+    /// The patient's leg the mesh follows (`None` on the elliptic cylinder).
+    pub fn leg(&self) -> Option<&LegSurface> {
+        self.leg.as_ref()
+    }
+
+    /// Each node's normal-spring rest length over the reference layer
+    /// `thigh.tissue_thickness` (1 on the cylinder): the factor on the
+    /// normal law's `b` and asymptote (see `TissueParams`).
+    pub fn layer_scales(&self) -> &[f64] {
+        &self.layer_scale
+    }
+
+    /// Each node's factor on its normal spring's stiffness (1 on the
+    /// cylinder; patient and adductor canal on a leg, see [`crate::leg`]).
+    pub fn stiffness_factors(&self) -> &[f64] {
+        &self.stiffness
     }
 
     /// The geometry the mesh was built from.

@@ -105,22 +105,34 @@ impl TissueForces {
                 }
             })
             .collect();
-        let asymptote = params.asymptote();
         let normals = (0..mesh.node_count())
             .map(|k| {
                 let anchor = mesh.anchors()[k];
                 let rest = (x0[k] - anchor).norm();
                 let n0 = mesh.rest_normals()[k];
                 let tangent = Matrix3::identity() - n0 * n0.transpose();
+                // Layer of rest length L = λ L_ref and stiffness factor φ:
+                // p(x) = φ (x/λ) / (normal_a (x/λ) + normal_b), i.e. the
+                // reference law at the same strain (a = normal_a/(φA),
+                // b = λ normal_b/(φA), asymptote λ b/a < L). The shear tie
+                // scales by φ only, not by 1/λ as a layer's G/L would: it is
+                // what keeps a compressed normal spring from buckling
+                // sideways (its geometric stiffness −|f|/l), and the
+                // calibrated value is the least that does (TissueParams);
+                // weaker, a 50 N press on a 62 mm layer slid the node
+                // around its anchor.
+                let (lambda, phi) = (mesh.layer_scales()[k], mesh.stiffness_factors()[k]);
+                let asymptote = lambda * params.asymptote();
+                let shear = phi;
                 NormalSpring {
                     rest_position: x0[k],
-                    tangential_k: tangent * (params.tangential_stiffness * areas[k]),
-                    tangential_c: tangent * (params.tangential_damping * areas[k]),
+                    tangential_k: tangent * (shear * params.tangential_stiffness * areas[k]),
+                    tangential_c: tangent * (shear * params.tangential_damping * areas[k]),
                     node: k,
                     anchor,
                     rest,
-                    a: params.normal_a / areas[k],
-                    b: params.normal_b / areas[k],
+                    a: params.normal_a / (phi * areas[k]),
+                    b: lambda * params.normal_b / (phi * areas[k]),
                     c: params.normal_damping * areas[k],
                     min_length: rest - (1.0 - margin) * asymptote,
                     diag: pattern.diagonal_index(k),

@@ -22,8 +22,9 @@ proptest! {
         kick in 0.0f64..2.0,
         h in 0.002f64..0.03,
         hold_ends in any::<bool>(),
+        on_leg in any::<bool>(),
     ) {
-        let mut c = common::small_config(n_theta, n_z);
+        let mut c = common::small_config_on(n_theta, n_z, on_leg);
         c.thigh.hold_ends = hold_ends;
         c.tissue.normal_b = normal_b;
         c.tissue.normal_a = normal_b / asymptote;

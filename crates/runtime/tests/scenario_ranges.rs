@@ -56,6 +56,8 @@ const KEYS: &[Key] = &[
     f("thigh.tissue_thickness", 0.005, 0.2),
     i("thigh.n_theta", 6.0, 1000.0),
     i("thigh.n_z", 3.0, 1000.0),
+    f("thigh.centre_s", 0.0, 1.0),
+    f("thigh.canal_stiffness", 1.0, 4.0),
     f("tissue.areal_density", 1.0, 200.0),
     f("tissue.structural_stiffness", 1.0, 1e5),
     f("tissue.shear_stiffness", 0.0, 1e5),

@@ -21,12 +21,25 @@ fn summary(mut ms: Vec<f64>) -> Value {
 /// Times `steps` physics steps (after a 0.5 s ramp to 10 mm) and the
 /// queries after each, on the default model at its default step; also the
 /// queries out of contact (probe 5 mm above the skin).
-pub fn contact_report(steps: usize) -> Result<Value> {
+///
+/// With `patient` (a preset), the mesh follows that patient's leg
+/// (`thigh.patient`, issue 12) and the probe presses its anterior line at
+/// the segment's centre.
+pub fn contact_report(steps: usize, patient: Option<&str>) -> Result<Value> {
     let steps = steps.max(10);
-    let config = ModelConfig::default();
+    let mut config = ModelConfig::default();
+    if let Some(p) = patient {
+        config.thigh.patient = p.to_string();
+    }
     let h = config.integrator.time_step;
-    let top = config.thigh.semi_axis_y;
     let mut model = ThighModel::new(&config).context("default model")?;
+    let top = match patient {
+        None => config.thigh.semi_axis_y,
+        Some(_) => {
+            let mesh = model.mesh();
+            mesh.rest_positions()[mesh.node_at(std::f64::consts::FRAC_PI_2, 0.0)].y
+        }
+    };
     let mut pc = ProbeContact::new(&model, Probe::default(), ContactParams::default())
         .context("default contact")?;
     let pose = |d: f64| Probe::exam_pose(Vec3::new(0.0, top - d, 0.0));

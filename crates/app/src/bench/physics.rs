@@ -34,6 +34,10 @@ pub struct Args {
     /// Steps of the contact case (default mesh, probe pressed 10 mm; 0 skips it).
     #[arg(long, default_value_t = 200)]
     contact_steps: usize,
+    /// Run the contact case on this patient's leg (a preset: lean-male,
+    /// average-female, obese; issue 12) instead of the elliptic cylinder.
+    #[arg(long)]
+    patient: Option<String>,
 }
 
 /// Runs the benchmark, prints the table on stderr, writes/prints the JSON.
@@ -66,8 +70,9 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         }
     }
     let contact = if args.contact_steps > 0 {
-        let c = super::contact::contact_report(args.contact_steps)?;
-        eprintln!("contact (default mesh, 10 mm press): {c}");
+        let c = super::contact::contact_report(args.contact_steps, args.patient.as_deref())?;
+        let on = args.patient.as_deref().unwrap_or("elliptic cylinder");
+        eprintln!("contact (default mesh on {on}, 10 mm press): {c}");
         c
     } else {
         serde_json::Value::Null

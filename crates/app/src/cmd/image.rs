@@ -7,6 +7,7 @@
 //! force, and the skin displacement under it is carried into the image
 //! (`runtime::section`), so the image and the force agree.
 
+use super::image_site;
 use anyhow::{Context, Result};
 use echothigh_imaging::{write_gray_png, Anatomy, FrameInput, ImagingConfig, Renderer, VeinState};
 use echothigh_runtime::physics_side::PhysicsSide;
@@ -48,6 +49,22 @@ pub struct Args {
     /// sections apply).
     #[arg(long)]
     pub config: Option<PathBuf>,
+    /// Patient of the 3D leg (a preset: lean-male, average-female, obese, or
+    /// a patient TOML file): with --at or --site, the image's vessels,
+    /// layers and femur come from the leg's section there. Default lean-male.
+    #[arg(long)]
+    pub patient: Option<String>,
+    /// Probe position on the 3D leg: mm below the inguinal ligament.
+    #[arg(long, allow_hyphen_values = true)]
+    pub at: Option<f64>,
+    /// Angle around the leg (degrees from the anterior line, + medial);
+    /// default: centred over the deep vein at that level. Only with --at.
+    #[arg(long, allow_hyphen_values = true)]
+    pub angle: Option<f64>,
+    /// Named exam site on the 3D leg: cfv, sfj, fv-proximal, fv-mid,
+    /// fv-distal, popliteal (a level and a probe angle).
+    #[arg(long)]
+    pub site: Option<String>,
 }
 
 fn parse_vein(s: &str) -> Result<VeinState, String> {
@@ -114,7 +131,20 @@ fn write(path: &Path, cfg: &ImagingConfig, frame: &[u8]) -> Result<()> {
 /// Runs `echothigh image`.
 pub fn run(args: Args) -> Result<()> {
     let scenario = load_scenario(&args)?;
-    let cfg = scenario.imaging_config();
+    let mut cfg = scenario.imaging_config();
+    if args.patient.is_some() || args.at.is_some() || args.site.is_some() || args.angle.is_some() {
+        let patient = args.patient.as_deref().unwrap_or("lean-male");
+        let placement = image_site::place(patient, args.at, args.angle, args.site.as_deref())?;
+        cfg.anatomy = image_site::section_anatomy(&cfg.anatomy, &placement)?;
+        println!(
+            "patient {patient}, s = {:.1} mm, angle {:.1}°: {} {:.1} mm deep, {:.1} mm wide",
+            placement.pose.s * 1e3,
+            placement.pose.theta.to_degrees(),
+            placement.anatomy.deep_vein_at(placement.pose.s).as_str(),
+            cfg.anatomy.vein_depth * 1e3,
+            cfg.anatomy.vein_diameter * 1e3
+        );
+    }
     let face_area = cfg.probe_area();
     anyhow::ensure!(
         args.lateral.is_finite(),

@@ -6,5 +6,6 @@ pub mod calibrate_device;
 pub mod device_arg;
 pub mod devices;
 pub mod image;
+pub mod image_site;
 pub mod net;
 pub mod run;

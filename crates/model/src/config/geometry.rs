@@ -62,6 +62,29 @@ pub struct ThighGeometry {
     pub n_z: usize,
     /// Hold the two end rings fixed (Dirichlet). Default true.
     pub hold_ends: bool,
+    /// The anatomical leg the mesh follows (issue 12): a patient preset of
+    /// `echothigh_anatomy` (`lean-male`, `average-female`, `obese`), or `""`
+    /// for the elliptic cylinder above. With a patient the skin is the
+    /// patient's tapered leg (`semi_axis_*` and `femur_*` are unused), each
+    /// normal spring's anchor is the nearest point of the oblique femur (its
+    /// rest length varies along and around the leg), `tissue_thickness` is
+    /// the reference layer thickness the `[tissue]` normal law holds for
+    /// (scaled per node by rest length, see `TissueParams`), and the band
+    /// over the adductor canal is `canal_stiffness` times stiffer (see
+    /// `crate::leg`). Default `""`.
+    pub patient: String,
+    /// With a `patient`: the position along the leg of the segment's centre
+    /// `z = 0`, `s` (m below the inguinal ligament; `s = centre_s − z`). The
+    /// segment `[centre_s − length/2, centre_s + length/2]` must lie on the
+    /// femur, `s ∈ [0, knee_s]`. Default 0.20 (mid-thigh of the default
+    /// `lean-male`, knee_s/2).
+    pub centre_s: f64,
+    /// With a `patient`: factor on the normal springs' stiffness over the
+    /// adductor canal, in [1, 4]. Default 1.5 (estimate: "the adductor
+    /// canal is hard to compress", reference cus-exam-fidelity row 22,
+    /// clinical practice; no measured ratio was retrieved, and 2× is the
+    /// active-muscle factor of row 19, an upper bound for a passive leg).
+    pub canal_stiffness: f64,
 }
 
 impl Default for ThighGeometry {
@@ -76,6 +99,9 @@ impl Default for ThighGeometry {
             n_theta: 48,
             n_z: 21,
             hold_ends: true,
+            patient: String::new(),
+            centre_s: 0.20,
+            canal_stiffness: 1.5,
         }
     }
 }
@@ -187,7 +213,27 @@ impl ThighGeometry {
                 ),
             ));
         }
-        self.check_femur(prefix)
+        range(
+            prefix,
+            "centre_s",
+            self.centre_s,
+            (0.0, 1.0),
+            "m",
+            "a position along a leg",
+        )?;
+        range(
+            prefix,
+            "canal_stiffness",
+            self.canal_stiffness,
+            (1.0, 4.0),
+            "",
+            "the adductor canal is stiffer than the rest, at most ~2× twice over",
+        )?;
+        if self.patient.is_empty() {
+            self.check_femur(prefix)
+        } else {
+            crate::leg::LegSurface::new(self, prefix).map(|_| ())
+        }
     }
 
     /// The femur must lie inside the skin, and every anchor outside the femur.

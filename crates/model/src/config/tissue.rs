@@ -26,7 +26,12 @@ use serde::{Deserialize, Serialize};
 /// A`, `b = normal_b / A`. The initial stiffness per unit area is
 /// `1/normal_b` (N/m³) and the compression asymptote `normal_b / normal_a`
 /// (m) does not depend on the area; it must be shorter than
-/// `thigh.tissue_thickness`.
+/// `thigh.tissue_thickness`. On a patient's leg (`thigh.patient`) the law
+/// holds for the reference layer `thigh.tissue_thickness`; a node whose
+/// layer is `λ` times thicker and `φ` times stiffer (regional factor) gets
+/// the same law at the same strain, `a = normal_a/(φA)`, `b = λ
+/// normal_b/(φA)` (asymptote `λ b/a`), and its shear tie `φ k_t A` (see
+/// `crate::leg`).
 ///
 /// **Tangential support** (beyond the paper): the normal springs alone have
 /// no shear stiffness, and compressed they are laterally unstable (their

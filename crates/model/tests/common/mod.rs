@@ -11,6 +11,15 @@ pub fn small_config(n_theta: usize, n_z: usize) -> ModelConfig {
     c
 }
 
+/// As [`small_config`], on the default patient's leg (issue 12) when `leg`.
+pub fn small_config_on(n_theta: usize, n_z: usize, leg: bool) -> ModelConfig {
+    let mut c = small_config(n_theta, n_z);
+    if leg {
+        c.thigh.patient = "lean-male".into();
+    }
+    c
+}
+
 /// Builds a model, panicking on an invalid configuration (tests only).
 pub fn model(config: &ModelConfig) -> ThighModel {
     ThighModel::new(config).expect("valid test configuration")

@@ -1,0 +1,125 @@
+//! `echothigh image --patient P (--at S [--angle A] | --site NAME)`: the
+//! imaging anatomy taken from the section of the 3D leg (`echothigh-anatomy`)
+//! under a probe held normal to the skin there.
+//!
+//! The B-mode renderer draws one vein–artery pair over the femur, with the
+//! skin, fat, fascia and muscle layers; this module fills those from the
+//! section: the deep vein of the level (`cfv`, `fv` or `pv`) and its
+//! companion artery (`cfa`, `fa`, `pa`) with their position, depth and
+//! area-equivalent diameter (`2 √(a b)` of the cut ellipse, which keeps the
+//! lumen's area when the plane is oblique), the femur's position and
+//! radius, the skin's and the fascia's depth. The other structures of the
+//! section (GSV, profunda, sartorius, the lymph node) are listed by
+//! `echothigh anatomy` but not drawn yet.
+
+use crate::cmd::anatomy::load_patient;
+use anyhow::{bail, Context, Result};
+use echothigh_anatomy::{Anatomy, ProbePose, Section, Site, StructureId};
+use echothigh_imaging::AnatomyConfig;
+
+/// Where the probe is on the leg: a patient and a level (or a site).
+#[derive(Debug, Clone)]
+pub struct Placement {
+    /// The patient's anatomy.
+    pub anatomy: Anatomy,
+    /// The probe's pose.
+    pub pose: ProbePose,
+}
+
+/// Resolves `--patient`, `--at` (mm below the inguinal ligament),
+/// `--angle` (degrees from the anterior line, + medial) and `--site`;
+/// errors name the argument at fault.
+pub fn place(
+    patient: &str,
+    at_mm: Option<f64>,
+    angle_deg: Option<f64>,
+    site: Option<&str>,
+) -> Result<Placement> {
+    let p = load_patient(patient)?;
+    let anatomy = Anatomy::new(p).with_context(|| format!("patient {patient}"))?;
+    let pose = match (site, at_mm) {
+        (Some(_), Some(_)) => bail!("give either --site or --at, not both"),
+        (Some(name), None) => {
+            if angle_deg.is_some() {
+                bail!("--angle goes with --at (a site sets its own angle)");
+            }
+            let site: Site = name.parse().context("--site")?;
+            anatomy.site_pose(site)
+        }
+        (None, Some(at)) => {
+            let s = at * 1e-3;
+            anatomy.check_s("--at (m)", s)?;
+            match angle_deg {
+                Some(deg) if !deg.is_finite() => bail!("--angle {deg} is not a finite angle"),
+                Some(deg) => ProbePose::transverse(s, deg.to_radians()),
+                None => anatomy.pose_over(s, anatomy.deep_vein_at(s))?,
+            }
+        }
+        (None, None) => bail!("--patient needs --at or --site"),
+    };
+    Ok(Placement { anatomy, pose })
+}
+
+/// The companion artery of a deep vein.
+fn artery_of(vein: StructureId) -> StructureId {
+    match vein {
+        StructureId::Cfv => StructureId::Cfa,
+        StructureId::Fv => StructureId::Fa,
+        _ => StructureId::Pa,
+    }
+}
+
+/// `base` with its layers, vessels and femur taken from the section at
+/// `placement` (validated with the prefix `imaging.anatomy`: a section the
+/// renderer cannot draw, e.g. a vessel beyond ±50 mm of the probe's centre,
+/// is refused naming the key).
+pub fn section_anatomy(base: &AnatomyConfig, placement: &Placement) -> Result<AnatomyConfig> {
+    let a = &placement.anatomy;
+    let section = a.section(&placement.pose)?;
+    let vein_id = a.deep_vein_at(placement.pose.s);
+    let cut = |id: StructureId| -> Result<(f64, f64, f64)> {
+        let x = section.get(id).with_context(|| {
+            format!(
+                "the section at s = {:.1} mm does not cut `{}`: aim the probe at it (--angle)",
+                placement.pose.s * 1e3,
+                id.as_str()
+            )
+        })?;
+        let e = &x.ellipse;
+        Ok((e.lateral, e.depth, 2.0 * (e.radii[0] * e.radii[1]).sqrt()))
+    };
+    let (vl, vd, vdia) = cut(vein_id)?;
+    let (al, ad, adia) = cut(artery_of(vein_id))?;
+    let (fl, fd, fdia) = cut(StructureId::Femur)?;
+    let femur_r = 0.5 * fdia;
+    let mut c = base.clone();
+    c.skin_thickness = section.skin_depth;
+    c.fat_thickness = section.fascia_depth - section.skin_depth;
+    c.vein_lateral = vl;
+    c.vein_depth = vd;
+    c.vein_diameter = vdia;
+    c.artery_lateral = al;
+    c.artery_depth = ad;
+    c.artery_diameter = adia;
+    c.femur_lateral = fl;
+    c.femur_radius = femur_r;
+    c.muscle_thickness = fd - femur_r - section.fascia_depth;
+    c.intermuscular_fascia_depth = intermuscular(&section, c.intermuscular_fascia_depth);
+    c.validate("imaging.anatomy").with_context(|| {
+        format!(
+            "the section at s = {:.1} mm, angle {:.1}° cannot be drawn",
+            placement.pose.s * 1e3,
+            placement.pose.theta.to_degrees()
+        )
+    })?;
+    Ok(c)
+}
+
+/// Depth (m) of the sartorius' deep surface when the section cuts it (the
+/// adductor canal's roof), else `fallback`.
+fn intermuscular(section: &Section, fallback: f64) -> f64 {
+    section
+        .get(StructureId::Sartorius)
+        .map(|x| x.ellipse.depth + x.ellipse.radii[0].min(x.ellipse.radii[1]))
+        .unwrap_or(fallback)
+}
