@@ -258,11 +258,16 @@ fn a_killed_virtual_run_keeps_what_it_computed() {
         t.windows(2).all(|w| w[1] > w[0]),
         "rows out of order or repeated"
     );
-    // The physics trace streams alongside: 100 Hz against 1 kHz.
+    // The physics trace streams alongside (100 Hz against 1 kHz), through
+    // its own buffer: it may lag the ticks by what the run computes in one
+    // flush-and-drain period of wall time, bounded here by 1 s of wall time
+    // at the rate this run went (the promise: a kill loses at most the last
+    // second).
     let steps = times(&whole(&out.join("physics.csv")));
+    let ticks_per_wall_second = t.len() as f64 / start.elapsed().as_secs_f64();
     assert!(
-        steps.len() * 10 + 200 >= t.len(),
-        "{} steps for {} ticks",
+        steps.len() as f64 * 10.0 + ticks_per_wall_second + 200.0 >= t.len() as f64,
+        "{} steps for {} ticks ({ticks_per_wall_second:.0} ticks per second of wall time)",
         steps.len(),
         t.len()
     );

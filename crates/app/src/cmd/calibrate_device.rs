@@ -9,6 +9,7 @@ use echothigh_devices_hw::{
     capture_landmarks, open_hardware, CaptureConfig, CaptureEvent, DeviceKind, HardwareConfig,
     Landmark, Vec3,
 };
+use echothigh_model::{LegSurface, ThighGeometry};
 use echothigh_runtime::signals::stop_on_signals;
 use std::path::PathBuf;
 
@@ -30,41 +31,49 @@ pub struct Args {
     timeout: f64,
 }
 
-/// Four landmarks on the scenario's elliptic thigh (semi-axes `a` lateral,
-/// `b` anterior, m), not collinear: the top at mid-thigh, 10 cm proximal
-/// and distal of it (within the thigh's length), and the lateral side.
-pub fn thigh_landmarks(a: f64, b: f64, length: f64) -> Vec<Landmark> {
-    let dz = (0.5 * length - 0.03).clamp(0.02, 0.1);
-    [
+/// Four landmarks on the scenario's thigh, not collinear: the top at
+/// mid-thigh (z = 0), `dz` towards the groin and the knee of it (10 cm, or
+/// less on a short thigh), and the lateral side at mid-thigh. On the
+/// elliptic cylinder (semi-axes `a` lateral, `b` anterior, m) they are
+/// `(0, b, 0)`, `(0, b, ±dz)`, `(a, 0, 0)`; on a patient's leg
+/// (`thigh.patient`) the skin points of the model's mesh there.
+pub fn thigh_landmarks(thigh: &ThighGeometry) -> Result<Vec<Landmark>> {
+    let dz = (0.5 * thigh.length - 0.03).clamp(0.02, 0.1);
+    let leg = LegSurface::new(thigh, "thigh").map_err(anyhow::Error::msg)?;
+    // Model ring angles: π/2 anterior (the top), 0 lateral.
+    let at = |theta: f64, z: f64| -> Vec3 {
+        match &leg {
+            Some(l) => l.node(theta, z).position,
+            None => Vec3::new(
+                thigh.semi_axis_x * theta.cos(),
+                thigh.semi_axis_y * theta.sin(),
+                z,
+            ),
+        }
+    };
+    let top = std::f64::consts::FRAC_PI_2;
+    let cm = dz * 100.0;
+    Ok([
         (
             "the top of the thigh at mid-thigh".to_string(),
-            [0.0, b, 0.0],
+            at(top, 0.0),
         ),
         (
-            format!(
-                "the top of the thigh, {:.0} cm towards the groin",
-                dz * 100.0
-            ),
-            [0.0, b, dz],
+            format!("the top of the thigh, {cm:.0} cm towards the groin"),
+            at(top, dz),
         ),
         (
-            format!(
-                "the top of the thigh, {:.0} cm towards the knee",
-                dz * 100.0
-            ),
-            [0.0, b, -dz],
+            format!("the top of the thigh, {cm:.0} cm towards the knee"),
+            at(top, -dz),
         ),
         (
             "the outer (lateral) side at mid-thigh".to_string(),
-            [a, 0.0, 0.0],
+            at(0.0, 0.0),
         ),
     ]
     .into_iter()
-    .map(|(name, p)| Landmark {
-        name,
-        leg: Vec3::from(p),
-    })
-    .collect()
+    .map(|(name, leg)| Landmark { name, leg })
+    .collect())
 }
 
 /// Runs the calibration.
@@ -100,11 +109,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut device = open_hardware(kind, &config).with_context(|| {
         format!("opening the {kind} device (`echothigh devices` lists what is installed)")
     })?;
-    let landmarks = thigh_landmarks(
-        scenario.thigh.semi_axis_x,
-        scenario.thigh.semi_axis_y,
-        scenario.thigh.length,
-    );
+    let landmarks = thigh_landmarks(&scenario.thigh)?;
     let capture = CaptureConfig {
         timeout: args.timeout,
         ..CaptureConfig::default()

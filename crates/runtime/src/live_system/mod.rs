@@ -206,6 +206,16 @@ impl LiveSystem {
         if let Ok(mut f) = self.shared.fault.lock() {
             *f = None;
         }
+        if keep == Keep::Nothing {
+            // The thigh restarts from rest: what the page reads until the
+            // new physics publishes is the rest state, not the old press
+            // (a stale 6 N was read after a reset under load).
+            if let Ok(mut snap) = self.shared.snapshot.lock() {
+                snap.positions.clone_from(&self.shared.mesh.rest);
+                snap.compression.iter_mut().for_each(|c| *c = 0.0);
+                snap.status.physics_force = [0.0; 3];
+            }
+        }
         inner.session = Some(start_session(
             &self.shared,
             &inner.scenario,
