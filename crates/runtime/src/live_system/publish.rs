@@ -215,3 +215,54 @@ fn imaging_loop(shared: &Shared, cfg: &ImagingConfig, stop: &AtomicBool) -> Resu
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::live::{LiveMesh, LiveSnapshot};
+    use crate::live_system::shared::{ImageInput, ImageSlot};
+    use std::sync::atomic::{AtomicU8, AtomicUsize};
+    use std::sync::Mutex;
+
+    /// The imaging thread's failure path (issue 16: every thread reports its
+    /// error): a renderer that cannot be built stops the thread with the
+    /// error, `stop` joins it and returns that error, and the page's fault
+    /// line names the thread.
+    #[test]
+    fn a_failing_imaging_thread_is_joined_and_reports_its_error() {
+        let shared = Arc::new(Shared {
+            mesh: LiveMesh {
+                rest: Vec::new(),
+                triangles: Vec::new(),
+            },
+            snapshot: Mutex::new(LiveSnapshot::default()),
+            image_input: Mutex::new(ImageInput {
+                deformation: SectionDeformation::rest(0.04),
+                pressure: 0.0,
+                time: 0.0,
+                lateral_offset: 0.0,
+            }),
+            image: Mutex::new(ImageSlot {
+                pixels: Vec::new(),
+                width: 0,
+                height: 0,
+                frame: 0,
+                time: 0.0,
+            }),
+            vein: AtomicU8::new(0),
+            haptic: Mutex::new(None),
+            watchers: AtomicUsize::new(1),
+            fault: Mutex::new(None),
+        });
+        // An image of no rows: the scenario loader refuses it, so it is set
+        // here behind the loader's back to make the renderer fail.
+        let mut scenario = Scenario::default();
+        scenario.imaging.rows = 0;
+        let thread = ImagingThread::spawn(shared.clone(), &scenario).unwrap();
+        let err = thread.stop().unwrap_err();
+        assert!(format!("{err:#}").contains("imaging"), "{err:#}");
+        let fault = shared.fault.lock().unwrap().clone();
+        let fault = fault.expect("the fault reached the page's status");
+        assert!(fault.starts_with("the imaging thread stopped"), "{fault}");
+    }
+}
