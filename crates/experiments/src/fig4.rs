@@ -13,8 +13,8 @@ use crate::plot::{Figure, Panel, Series};
 use anyhow::{bail, Context, Result};
 use echothigh_runtime::live::CouplingMode;
 use echothigh_runtime::scenario::Scenario;
+use echothigh_table::RowWriter;
 use serde::Serialize;
-use std::io::Write;
 use std::path::Path;
 
 /// The modes of the figure, in the order of the traces and the table.
@@ -212,22 +212,24 @@ pub fn figure(result: &Fig4Result) -> Figure {
 pub fn write_force_csv(path: &Path, traces: &[ModeTrace]) -> Result<()> {
     let file =
         std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-    let mut w = std::io::BufWriter::new(file);
-    let names: Vec<&str> = traces.iter().map(|t| mode_name(t.mode)).collect();
-    writeln!(w, "t,{},phase,holding", names.join(","))?;
-    let n = traces.iter().map(|t| t.force.len()).min().unwrap_or(0);
-    let first = traces.first();
-    for k in 0..n {
-        write!(w, "{:.3}", first.map_or(0.0, |t| t.t[k]))?;
-        for tr in traces {
-            write!(w, ",{:.6}", tr.force[k])?;
+    let mut w = RowWriter::new(std::io::BufWriter::new(file));
+    let mut write = || -> std::io::Result<()> {
+        let mut header = vec!["t".to_string()];
+        header.extend(traces.iter().map(|t| mode_name(t.mode).to_string()));
+        header.extend(["phase".to_string(), "holding".to_string()]);
+        w.record(header)?;
+        let n = traces.iter().map(|t| t.force.len()).min().unwrap_or(0);
+        let first = traces.first();
+        for k in 0..n {
+            let mut row = vec![format!("{:.3}", first.map_or(0.0, |t| t.t[k]))];
+            row.extend(traces.iter().map(|tr| format!("{:.6}", tr.force[k])));
+            let (phase, holding) = first.map_or((255, false), |t| (t.phase[k], t.holding[k]));
+            row.extend([phase.to_string(), u8::from(holding).to_string()]);
+            w.record(row)?;
         }
-        let (phase, holding) = first.map_or((255, false), |t| (t.phase[k], t.holding[k]));
-        writeln!(w, ",{phase},{}", u8::from(holding))?;
-    }
-    w.flush()
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+        w.flush()
+    };
+    write().with_context(|| format!("writing {}", path.display()))
 }
 
 /// Writes every file of the experiment into `dir` (created if needed) and

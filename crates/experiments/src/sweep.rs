@@ -9,7 +9,7 @@ use crate::plot::{Figure, Panel, Series};
 use anyhow::{Context, Result};
 use echothigh_runtime::live::CouplingMode;
 use echothigh_runtime::scenario::Scenario;
-use std::io::Write;
+use echothigh_table::RowWriter;
 use std::path::Path;
 
 /// The parameter a sweep varies.
@@ -161,37 +161,47 @@ pub fn sweep(base: &Scenario, kind: SweepKind, values: &[f64]) -> Result<Sweep> 
 pub fn write_sweep_csv(path: &Path, kind: SweepKind, rows: &[SweepRow]) -> Result<()> {
     let file =
         std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-    let mut w = std::io::BufWriter::new(file);
-    writeln!(
-        w,
-        "{},mode,rms_error_n,rms_error_rel,peak_error_n,hold_contact_losses,hold_zero_ticks,hold_oscillation,\
-         max_tick_change_n,rms_tick_change_n,energy_above_30hz_n2s,device_energy_j,peak_force_n,trembles",
-        kind.column()
-    )?;
-    for r in rows {
-        let m = &r.metrics;
-        writeln!(
-            w,
-            "{},{},{:.6},{:.6},{:.6},{},{},{:.6},{:.6},{:.6},{:.6},{:.6},{:.6},{}",
-            r.value,
-            mode_name(r.mode),
-            m.rms_error,
-            m.rms_error_rel,
-            m.peak_error,
-            m.hold_contact_losses,
-            m.hold_zero_ticks,
-            m.hold_oscillation,
-            m.max_tick_change,
-            m.rms_tick_change,
-            m.energy_above_30hz,
-            m.device_energy,
-            m.peak_force,
-            u8::from(m.trembles)
-        )?;
-    }
-    w.flush()
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+    let mut w = RowWriter::new(std::io::BufWriter::new(file));
+    let mut write = || -> std::io::Result<()> {
+        w.record([
+            kind.column(),
+            "mode",
+            "rms_error_n",
+            "rms_error_rel",
+            "peak_error_n",
+            "hold_contact_losses",
+            "hold_zero_ticks",
+            "hold_oscillation",
+            "max_tick_change_n",
+            "rms_tick_change_n",
+            "energy_above_30hz_n2s",
+            "device_energy_j",
+            "peak_force_n",
+            "trembles",
+        ])?;
+        for r in rows {
+            let m = &r.metrics;
+            let f = |v: f64| format!("{v:.6}");
+            w.record([
+                r.value.to_string(),
+                mode_name(r.mode).to_string(),
+                f(m.rms_error),
+                f(m.rms_error_rel),
+                f(m.peak_error),
+                m.hold_contact_losses.to_string(),
+                m.hold_zero_ticks.to_string(),
+                f(m.hold_oscillation),
+                f(m.max_tick_change),
+                f(m.rms_tick_change),
+                f(m.energy_above_30hz),
+                f(m.device_energy),
+                f(m.peak_force),
+                u8::from(m.trembles).to_string(),
+            ])?;
+        }
+        w.flush()
+    };
+    write().with_context(|| format!("writing {}", path.display()))
 }
 
 fn curve(

@@ -13,8 +13,9 @@
 use crate::trace::{write_physics_header, write_physics_row, write_tick_header, write_tick_row};
 use crate::trace::{PhysicsRecord, TickRecord};
 use anyhow::{bail, Context, Result};
+use echothigh_table::RowWriter;
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::BufWriter;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
@@ -131,15 +132,18 @@ impl Streams {
     };
 }
 
+/// The CSV writer of a streamed file (the project's one writer).
+type Csv = RowWriter<BufWriter<File>>;
+
 /// Writes one record as a CSV row.
-type RowWriter<T> = Box<dyn FnMut(&mut dyn Write, &T) -> std::io::Result<()> + Send>;
+type RowFn<T> = Box<dyn FnMut(&mut Csv, &T) -> std::io::Result<()> + Send>;
 
 /// One CSV file the writer streams to.
 struct CsvStream<T> {
     path: PathBuf,
-    out: BufWriter<File>,
+    out: Csv,
     ring: rtrb::Consumer<T>,
-    row: RowWriter<T>,
+    row: RowFn<T>,
     kept: Vec<T>,
 }
 
@@ -207,10 +211,10 @@ impl Recording {
                 need.div_ceil(1_000_000)
             );
         }
-        let open = |name: &str| -> Result<(PathBuf, BufWriter<File>)> {
+        let open = |name: &str| -> Result<(PathBuf, Csv)> {
             let path = dir.join(name);
             let f = File::create(&path).with_context(|| format!("creating {}", path.display()))?;
-            Ok((path, BufWriter::with_capacity(1 << 16, f)))
+            Ok((path, RowWriter::new(BufWriter::with_capacity(1 << 16, f))))
         };
         let mode_name = mode.to_string();
         let (tick_sink, mut ticks) = if streams.ticks {

@@ -5,6 +5,7 @@
 
 use anyhow::{Context, Result};
 use echothigh_model::StepTimings;
+use echothigh_table::RowWriter;
 use serde::Serialize;
 use std::io::Write;
 use std::path::Path;
@@ -64,82 +65,116 @@ fn norm(v: [f64; 3]) -> f64 {
 }
 
 /// Writes the header of `haptic.csv`.
-pub fn write_tick_header(w: &mut dyn Write, _mode: &str) -> std::io::Result<()> {
-    writeln!(
-        w,
-        "t,device_x,device_y,device_z,proxy_x,proxy_y,proxy_z,force_x,force_y,force_z,force,\
-         device_force_x,device_force_y,device_force_z,model_age,phase,holding,mode"
-    )
+pub fn write_tick_header(w: &mut RowWriter<impl Write>, _mode: &str) -> std::io::Result<()> {
+    w.record([
+        "t",
+        "device_x",
+        "device_y",
+        "device_z",
+        "proxy_x",
+        "proxy_y",
+        "proxy_z",
+        "force_x",
+        "force_y",
+        "force_z",
+        "force",
+        "device_force_x",
+        "device_force_y",
+        "device_force_z",
+        "model_age",
+        "phase",
+        "holding",
+        "mode",
+    ])
 }
 
-/// Writes one row of `haptic.csv` (`mode`: the coupling mode's name).
-pub fn write_tick_row(w: &mut dyn Write, r: &TickRecord, mode: &str) -> std::io::Result<()> {
-    writeln!(
-        w,
-        "{:.4},{:.7},{:.7},{:.7},{:.7},{:.7},{:.7},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.5},{:.4},{},{},{}",
-        r.t,
-        r.device[0],
-        r.device[1],
-        r.device[2],
-        r.proxy[0],
-        r.proxy[1],
-        r.proxy[2],
-        r.force[0],
-        r.force[1],
-        r.force[2],
-        norm(r.force),
-        r.device_force[0],
-        r.device_force[1],
-        r.device_force[2],
-        r.model_age,
-        r.phase,
-        u8::from(r.holding),
-        mode
-    )
+/// Writes one row of `haptic.csv` (`mode`: the coupling mode's name):
+/// positions to 0.1 µm, forces to 10 µN, times to 0.1 ms.
+pub fn write_tick_row(
+    w: &mut RowWriter<impl Write>,
+    r: &TickRecord,
+    mode: &str,
+) -> std::io::Result<()> {
+    let m = |v: f64| format!("{v:.7}");
+    let n = |v: f64| format!("{v:.5}");
+    w.record([
+        format!("{:.4}", r.t),
+        m(r.device[0]),
+        m(r.device[1]),
+        m(r.device[2]),
+        m(r.proxy[0]),
+        m(r.proxy[1]),
+        m(r.proxy[2]),
+        n(r.force[0]),
+        n(r.force[1]),
+        n(r.force[2]),
+        n(norm(r.force)),
+        n(r.device_force[0]),
+        n(r.device_force[1]),
+        n(r.device_force[2]),
+        format!("{:.4}", r.model_age),
+        r.phase.to_string(),
+        u8::from(r.holding).to_string(),
+        mode.to_string(),
+    ])
 }
 
 /// Writes the header of `physics.csv`: the step's values, then one column
 /// per stage of [`StepTimings`], named `{stage}_s` (seconds).
-pub fn write_physics_header(w: &mut dyn Write) -> std::io::Result<()> {
-    write!(
-        w,
-        "t,probe_x,probe_y,probe_z,distance,grad_x,grad_y,grad_z,stiffness,force_x,force_y,force_z,force,\
-         newton_iterations,cg_iterations,limited,compute_time"
-    )?;
-    for name in StepTimings::NAMES {
-        write!(w, ",{name}_s")?;
-    }
-    writeln!(w)
+pub fn write_physics_header(w: &mut RowWriter<impl Write>) -> std::io::Result<()> {
+    let mut h: Vec<String> = [
+        "t",
+        "probe_x",
+        "probe_y",
+        "probe_z",
+        "distance",
+        "grad_x",
+        "grad_y",
+        "grad_z",
+        "stiffness",
+        "force_x",
+        "force_y",
+        "force_z",
+        "force",
+        "newton_iterations",
+        "cg_iterations",
+        "limited",
+        "compute_time",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    h.extend(StepTimings::NAMES.iter().map(|n| format!("{n}_s")));
+    w.record(h)
 }
 
 /// Writes one row of `physics.csv`.
-pub fn write_physics_row(w: &mut dyn Write, r: &PhysicsRecord) -> std::io::Result<()> {
-    write!(
-        w,
-        "{:.4},{:.7},{:.7},{:.7},{:.7},{:.6},{:.6},{:.6},{:.3},{:.5},{:.5},{:.5},{:.5},{},{},{},{:.6}",
-        r.t,
-        r.probe[0],
-        r.probe[1],
-        r.probe[2],
-        r.distance,
-        r.gradient[0],
-        r.gradient[1],
-        r.gradient[2],
-        r.stiffness,
-        r.force[0],
-        r.force[1],
-        r.force[2],
-        norm(r.force),
-        r.newton_iterations,
-        r.cg_iterations,
-        r.limited,
-        r.compute_time
-    )?;
+pub fn write_physics_row(w: &mut RowWriter<impl Write>, r: &PhysicsRecord) -> std::io::Result<()> {
+    let m = |v: f64| format!("{v:.7}");
+    let g = |v: f64| format!("{v:.6}");
+    let n = |v: f64| format!("{v:.5}");
+    let mut row = vec![
+        format!("{:.4}", r.t),
+        m(r.probe[0]),
+        m(r.probe[1]),
+        m(r.probe[2]),
+        m(r.distance),
+        g(r.gradient[0]),
+        g(r.gradient[1]),
+        g(r.gradient[2]),
+        format!("{:.3}", r.stiffness),
+        n(r.force[0]),
+        n(r.force[1]),
+        n(r.force[2]),
+        n(norm(r.force)),
+        r.newton_iterations.to_string(),
+        r.cg_iterations.to_string(),
+        r.limited.to_string(),
+        format!("{:.6}", r.compute_time),
+    ];
     // Stage times to the nanosecond (the monotonic clock's resolution).
-    for v in r.stages.values() {
-        write!(w, ",{v:.9}")?;
-    }
-    writeln!(w)
+    row.extend(r.stages.values().iter().map(|v| format!("{v:.9}")));
+    w.record(row)
 }
 
 /// Writes the 1 kHz trace as CSV (a whole trace at once; runs stream theirs
@@ -147,7 +182,7 @@ pub fn write_physics_row(w: &mut dyn Write, r: &PhysicsRecord) -> std::io::Resul
 pub fn write_ticks(path: &Path, mode: &str, rows: &[TickRecord]) -> Result<()> {
     let file =
         std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-    let mut w = std::io::BufWriter::new(file);
+    let mut w = RowWriter::new(std::io::BufWriter::new(file));
     let mut write = || -> std::io::Result<()> {
         write_tick_header(&mut w, mode)?;
         for r in rows {
@@ -162,7 +197,7 @@ pub fn write_ticks(path: &Path, mode: &str, rows: &[TickRecord]) -> Result<()> {
 pub fn write_physics(path: &Path, rows: &[PhysicsRecord]) -> Result<()> {
     let file =
         std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-    let mut w = std::io::BufWriter::new(file);
+    let mut w = RowWriter::new(std::io::BufWriter::new(file));
     let mut write = || -> std::io::Result<()> {
         write_physics_header(&mut w)?;
         for r in rows {
@@ -203,8 +238,12 @@ mod tests {
             ..PhysicsRecord::default()
         };
         let mut out = Vec::new();
-        write_physics_header(&mut out).unwrap();
-        write_physics_row(&mut out, &r).unwrap();
+        {
+            let mut w = RowWriter::new(&mut out);
+            write_physics_header(&mut w).unwrap();
+            write_physics_row(&mut w, &r).unwrap();
+            w.flush().unwrap();
+        }
         let table = echothigh_table::Table::parse(&String::from_utf8(out).unwrap()).unwrap();
         let row = &table.rows()[0];
         for (name, want) in StepTimings::NAMES.iter().zip(stages.values()) {

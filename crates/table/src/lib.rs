@@ -237,6 +237,46 @@ impl Table {
     }
 }
 
+/// The project's one CSV writer (the `csv` crate): records streamed to
+/// `out` one at a time, every field as the caller formatted it (callers
+/// choose their numbers' precision). I/O errors come back as `io::Error`,
+/// for the caller to name its file.
+pub struct RowWriter<W: Write> {
+    inner: csv::Writer<W>,
+}
+
+impl<W: Write> RowWriter<W> {
+    /// A writer of records into `out` (no header is added: write it as the
+    /// first record).
+    pub fn new(out: W) -> Self {
+        RowWriter {
+            inner: csv::WriterBuilder::new()
+                .has_headers(false)
+                .from_writer(out),
+        }
+    }
+
+    /// Writes one record.
+    pub fn record<F: AsRef<[u8]>>(
+        &mut self,
+        fields: impl IntoIterator<Item = F>,
+    ) -> std::io::Result<()> {
+        self.inner.write_record(fields).map_err(into_io)
+    }
+
+    /// Hands everything written so far to `out` and flushes it.
+    pub fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+fn into_io(e: csv::Error) -> std::io::Error {
+    match e.into_kind() {
+        csv::ErrorKind::Io(e) => e,
+        other => std::io::Error::other(format!("{other:?}")),
+    }
+}
+
 /// Writes a table: `comment` lines first (each prefixed `# `), the header,
 /// then the rows (each field as given: callers format their numbers).
 pub fn write<W: Write, R, F>(
@@ -244,7 +284,7 @@ pub fn write<W: Write, R, F>(
     comment: &str,
     header: &[&str],
     rows: impl IntoIterator<Item = R>,
-) -> csv::Result<()>
+) -> std::io::Result<()>
 where
     R: IntoIterator<Item = F>,
     F: AsRef<[u8]>,
@@ -253,13 +293,12 @@ where
     for line in comment.lines() {
         writeln!(out, "# {line}")?;
     }
-    let mut w = csv::Writer::from_writer(out);
-    w.write_record(header)?;
+    let mut w = RowWriter::new(out);
+    w.record(header)?;
     for row in rows {
-        w.write_record(row)?;
+        w.record(row)?;
     }
-    w.flush()?;
-    Ok(())
+    w.flush()
 }
 
 #[cfg(test)]
