@@ -59,3 +59,70 @@ impl Levels {
         }
     }
 }
+
+/// The stretch of the leg a probe at `s` examines, named as a sonographer
+/// reports it (the segments of the deep veins, reference §1 "Protocols").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LegLevel {
+    /// Above the inguinal ligament (s < 0): outside the thigh.
+    AboveGroin,
+    /// The common femoral vein, groin (from the ligament to the profunda's
+    /// confluence), away from the SFJ.
+    CommonFemoral,
+    /// Within 1 cm of the saphenofemoral junction.
+    Saphenofemoral,
+    /// The proximal femoral vein in the femoral triangle (confluence to the
+    /// triangle's apex).
+    FemoralProximal,
+    /// The femoral vein in the adductor canal (apex to hiatus).
+    FemoralCanal,
+    /// The popliteal vein (hiatus to the knee joint line and just below).
+    Popliteal,
+    /// Below the model's end.
+    BelowKnee,
+}
+
+impl Levels {
+    /// The level a probe at `s` (m below the inguinal ligament) examines.
+    pub fn level_at(&self, s: f64) -> LegLevel {
+        if s < 0.0 {
+            LegLevel::AboveGroin
+        } else if (s - self.sfj).abs() <= 0.01 {
+            LegLevel::Saphenofemoral
+        } else if s < self.confluence {
+            LegLevel::CommonFemoral
+        } else if s < self.apex {
+            LegLevel::FemoralProximal
+        } else if s < self.hiatus {
+            LegLevel::FemoralCanal
+        } else if s <= self.length {
+            LegLevel::Popliteal
+        } else {
+            LegLevel::BelowKnee
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every named site lies at the level its name says (the sites of
+    /// `Anatomy::site_pose` and the levels come from the same fractions).
+    #[test]
+    fn sites_lie_at_their_levels() {
+        use crate::{Anatomy, Site};
+        let a = Anatomy::new(Patient::preset("lean-male").unwrap()).unwrap();
+        let lv = a.levels();
+        let at = |site| lv.level_at(a.site_pose(site).s);
+        assert_eq!(at(Site::Cfv), LegLevel::CommonFemoral);
+        assert_eq!(at(Site::Sfj), LegLevel::Saphenofemoral);
+        assert_eq!(at(Site::FvProximal), LegLevel::FemoralProximal);
+        assert_eq!(at(Site::FvMid), LegLevel::FemoralCanal);
+        assert_eq!(at(Site::FvDistal), LegLevel::FemoralCanal);
+        assert_eq!(at(Site::Popliteal), LegLevel::Popliteal);
+        assert_eq!(lv.level_at(-0.01), LegLevel::AboveGroin);
+        assert_eq!(lv.level_at(lv.length + 0.01), LegLevel::BelowKnee);
+    }
+}

@@ -44,7 +44,7 @@ pub use cut::Ellipse;
 pub use error::AnatomyError;
 pub use frame::Vec3;
 pub use leg::LegShape;
-pub use levels::Levels;
+pub use levels::{LegLevel, Levels};
 pub use patient::{Patient, Sex, PRESETS};
 pub use section::{ImagePlane, ProbePose, Section, SectionStructure, Site};
 pub use structure::{CrossSection, Ellipsoid, Kind, StructureId, Tube};

@@ -87,6 +87,9 @@ pub struct ClientConfig<'a> {
     pub peer_timeout: f64,
     /// Set from outside (a signal, the recorder) to stop the run early.
     pub stop: Arc<AtomicBool>,
+    /// The probe's orientation (w, x, y, z) sent while the device senses
+    /// none ([`crate::scenario::Scenario::probe_orientation`]).
+    pub orientation: [f64; 4],
 }
 
 /// Runs the haptic client for `config.duration` (s) of wall time, until the
@@ -107,6 +110,7 @@ pub fn run_client<D: TickDevice + Send + 'static>(
         duration,
         peer_timeout,
         stop,
+        orientation,
     } = config;
     let clock = Clock::start();
     let n_ticks = (duration * loop_config.rate_hz).ceil() as u64;
@@ -121,6 +125,7 @@ pub fn run_client<D: TickDevice + Send + 'static>(
         direct_physics,
     } = parts;
     let mut tick = HapticTick::new(device, source, scale, direct_physics, period);
+    tick.set_orientation(orientation);
     let mut observer = HandoffObserver::new(pose_in, ticks);
     let handle = std::thread::Builder::new()
         .name("haptic-loop".into())

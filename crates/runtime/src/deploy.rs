@@ -60,7 +60,7 @@ pub struct RunOutput {
 
 /// Builds the scripted device of a scenario.
 pub fn scripted_device(scenario: &Scenario) -> Result<SimulatedDevice> {
-    let script = ExamScript::new(scenario.exam.clone()).map_err(anyhow::Error::msg)?;
+    let script = ExamScript::new(scenario.exam_script_config()?).map_err(anyhow::Error::msg)?;
     let hand = SimulatedHand::scripted(scenario.hand, script).map_err(anyhow::Error::msg)?;
     SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)
 }
@@ -179,6 +179,7 @@ pub fn run_threads_on<D: TickDevice + Send + 'static>(
         duration: scenario.run.duration,
         peer_timeout: c.peer_timeout,
         stop: stop.clone(),
+        orientation: scenario.probe_orientation()?,
     };
     if c.mode == CouplingMode::Direct {
         let physics = PhysicsSide::new(scenario)?;

@@ -9,6 +9,7 @@
 pub mod client;
 pub mod coupling;
 pub mod deploy;
+pub mod exam_site;
 pub mod haptic_side;
 pub mod integrity;
 pub mod live;

@@ -4,6 +4,7 @@
 //!
 //! Units: SI (m, N, s), thigh frame (z along the thigh, x lateral, y up).
 
+pub use echothigh_anatomy::LegLevel;
 use serde::{Deserialize, Serialize};
 
 /// Coupling between physics and haptics (see `DESIGN.md` §3).
@@ -68,6 +69,12 @@ pub struct LiveStatus {
     pub latency_setting: f64,
     /// Whether the scripted exam is playing.
     pub exam_playing: bool,
+    /// Where the probe is along the leg: m below the inguinal ligament
+    /// (`s`), 0 on the elliptic cylinder (which has no groin).
+    pub level_s: f64,
+    /// The venous segment the probe examines at `level_s` (`None` on the
+    /// cylinder).
+    pub level: Option<LegLevel>,
 }
 
 impl LiveStatus {
@@ -92,6 +99,8 @@ impl LiveStatus {
             physics_rate_setting,
             latency_setting,
             exam_playing,
+            level_s,
+            level,
         } = *self;
         LiveStatus {
             time: finite(time),
@@ -110,6 +119,8 @@ impl LiveStatus {
             physics_rate_setting: finite(physics_rate_setting),
             latency_setting: finite(latency_setting),
             exam_playing,
+            level_s: finite(level_s),
+            level,
         }
     }
 }

@@ -5,6 +5,7 @@
 //! refused with the key named.
 
 use crate::coupling::CouplingConfig;
+use crate::exam_site::{ExamFrame, SiteConfig};
 use anyhow::{bail, Context, Result};
 use echothigh_contact::{ContactParams, Probe};
 use echothigh_device::{DeviceConfig, ExamConfig, HandConfig};
@@ -14,6 +15,9 @@ use echothigh_model::{IntegratorParams, ModelConfig, ThighGeometry, TissueParams
 use echothigh_transport::{in_process_pair, FaultConfig, InProcessEndpoint};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+
+/// The built-in scenario (`scenarios/default.toml`, embedded).
+pub const BUILTIN_SCENARIO: &str = include_str!("../../../scenarios/default.toml");
 
 /// Largest accepted scenario file (bytes): the default scenario written out
 /// in full is ~5 KB; 1 MiB leaves room for a thousand exam phases and stops
@@ -91,8 +95,12 @@ pub struct Scenario {
     pub device: DeviceConfig,
     /// Simulated hand impedance (`echothigh_device::HandConfig`).
     pub hand: HandConfig,
-    /// Scripted exam (`echothigh_device::ExamConfig`).
+    /// Scripted exam (`echothigh_device::ExamConfig`): its points and
+    /// directions in the model's frame, or in the site's frame when `[site]`
+    /// names one (see [`crate::exam_site`]).
     pub exam: ExamConfig,
+    /// The exam site on the patient's leg ([`SiteConfig`]).
+    pub site: SiteConfig,
     /// Coupling mode and rates.
     pub coupling: CouplingConfig,
     /// Link fault injection (`echothigh_transport::FaultConfig`).
@@ -116,14 +124,18 @@ impl Scenario {
         Ok(s)
     }
 
-    /// Reads a scenario file, or the built-in default when `path` is `None`.
+    /// The built-in scenario of `run`, `view` and `haptic-client` without
+    /// `--scenario` ([`BUILTIN_SCENARIO`]: the default patient's leg, the
+    /// exam over the mid-thigh femoral vein).
+    pub fn builtin() -> Result<Self> {
+        Self::from_toml_str(BUILTIN_SCENARIO, "(built-in scenarios/default.toml)")
+    }
+
+    /// Reads a scenario file, or the built-in one ([`Scenario::builtin`])
+    /// when `path` is `None`.
     pub fn load(path: Option<&Path>) -> Result<Self> {
         match path {
-            None => {
-                let s = Scenario::default();
-                s.validate().context("built-in default scenario")?;
-                Ok(s)
-            }
+            None => Self::builtin(),
             Some(p) => {
                 let text = read_bounded(p)?;
                 Self::from_toml_str(&text, &p.display().to_string())
@@ -146,6 +158,7 @@ impl Scenario {
         self.device.validate("device").map_err(anyhow::Error::msg)?;
         self.hand.validate("hand").map_err(anyhow::Error::msg)?;
         self.exam.validate("exam").map_err(anyhow::Error::msg)?;
+        self.exam_frame()?;
         self.coupling.validate("coupling")?;
         self.link.validate("link").map_err(anyhow::Error::msg)?;
         self.imaging
@@ -175,6 +188,32 @@ impl Scenario {
             );
         }
         Ok(())
+    }
+
+    /// The exam site's frame (`None` without `[site]`); errors name
+    /// `site.name`.
+    pub fn exam_frame(&self) -> Result<Option<ExamFrame>> {
+        self.site
+            .resolve(&self.thigh, "site")
+            .map_err(anyhow::Error::msg)
+    }
+
+    /// The scripted exam in the model's frame: `[exam]` as written, or taken
+    /// from the site's frame when `[site]` names one.
+    pub fn exam_script_config(&self) -> Result<ExamConfig> {
+        Ok(match self.exam_frame()? {
+            Some(frame) => frame.exam_in_model(&self.exam),
+            None => self.exam.clone(),
+        })
+    }
+
+    /// The probe's orientation (w, x, y, z; model ← tool) the tick sends
+    /// when the device senses none: the site's, else face down
+    /// ([`crate::tick::EXAM_ORIENTATION`]).
+    pub fn probe_orientation(&self) -> Result<[f64; 4]> {
+        Ok(self
+            .exam_frame()?
+            .map_or(crate::tick::EXAM_ORIENTATION, |f| f.orientation_wxyz()))
     }
 
     /// The imaging configuration, with the probe's face taken from `[probe]`.

@@ -60,7 +60,7 @@ impl VirtualRun {
     /// the scenario's exam script. Allocates the trace buffers for
     /// `scenario.run.duration`.
     pub fn new(scenario: &Scenario) -> Result<Self> {
-        let script = ExamScript::new(scenario.exam.clone()).map_err(anyhow::Error::msg)?;
+        let script = ExamScript::new(scenario.exam_script_config()?).map_err(anyhow::Error::msg)?;
         let hand = SimulatedHand::scripted(scenario.hand, script).map_err(anyhow::Error::msg)?;
         let device =
             SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)?;
@@ -82,13 +82,14 @@ impl VirtualRun {
             crate::live::CouplingMode::Direct => (Some(physics), None),
             _ => (None, Some(physics)),
         };
-        let tick = HapticTick::new(
+        let mut tick = HapticTick::new(
             device,
             source,
             scenario.device.force_scale(),
             tick_physics,
             c.haptic_period(),
         );
+        tick.set_orientation(scenario.probe_orientation()?);
         Ok(VirtualRun {
             period: c.haptic_period(),
             tick,

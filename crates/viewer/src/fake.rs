@@ -159,6 +159,9 @@ impl LiveControl for FakeLive {
             physics_rate_setting: i.rate,
             latency_setting: i.latency,
             exam_playing: i.playing,
+            // The fake's thigh is the cylinder: no level along a leg.
+            level_s: 0.0,
+            level: None,
         };
     }
 

@@ -306,6 +306,7 @@ pub fn client(args: ClientArgs) -> Result<()> {
         duration: scenario.run.duration,
         peer_timeout: c.peer_timeout,
         stop,
+        orientation: scenario.probe_orientation()?,
     };
     let link: Box<dyn Link> = Box::new(link);
     let report = match real {

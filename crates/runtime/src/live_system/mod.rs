@@ -24,6 +24,7 @@ use crate::physics_side::PhysicsSide;
 use crate::scenario::Scenario;
 use anyhow::{Context, Result};
 use echothigh_imaging::SectionDeformation;
+use echothigh_model::LegSurface;
 use nalgebra::{UnitQuaternion, Vector3};
 use publish::ImagingThread;
 use session::{start_session, Carried, Session};
@@ -38,6 +39,8 @@ struct Inner {
     target: HandTarget,
     /// Where the page last placed the probe: (theta, z, tilt) (rad, m, rad).
     placement: (f64, f64, f64),
+    /// The patient's leg the mesh follows (`None` on the cylinder).
+    leg: Option<LegSurface>,
 }
 
 /// Height of the lifted probe above the rest skin (m, a negative depth): a
@@ -94,10 +97,30 @@ pub struct LiveSystem {
 }
 
 /// The hand target for a probe placed at `theta` (rad, 0 = top, positive
-/// towards +x) and `z` (m) on the rest surface of the elliptic thigh, pressed
-/// `depth` (m) along the inward normal and tilted by `tilt` (rad) about the
-/// thigh axis.
-fn target_on_surface(s: &Scenario, theta: f64, z: f64, depth: f64, tilt: f64) -> HandTarget {
+/// towards +x, the lateral side) and `z` (m) on the rest surface, pressed
+/// `depth` (m) along the inward normal and rocked by `tilt` (rad) about the
+/// leg's axis. On a patient's leg the surface is its skin at
+/// `s = centre_s − z` and `θ_leg = −theta`
+/// ([`echothigh_model::LegSurface::hand_target`]); else the elliptic
+/// cylinder's. Errors name the placement the leg cannot take.
+fn target_on_surface(
+    s: &Scenario,
+    leg: Option<&LegSurface>,
+    theta: f64,
+    z: f64,
+    depth: f64,
+    tilt: f64,
+) -> Result<HandTarget, String> {
+    if let Some(leg) = leg {
+        let t = leg
+            .hand_target(leg.s_of_z(z), -theta, depth, 0.0)
+            .map_err(|e| format!("probe placement: {e}"))?;
+        let q = t.orientation * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), tilt);
+        return Ok(HandTarget {
+            position: t.position.into(),
+            orientation: [q.w, q.i, q.j, q.k],
+        });
+    }
     let (a, b) = (s.thigh.semi_axis_x, s.thigh.semi_axis_y);
     let tm = std::f64::consts::FRAC_PI_2 - theta;
     let point = Vector3::new(a * tm.cos(), b * tm.sin(), z);
@@ -105,9 +128,22 @@ fn target_on_surface(s: &Scenario, theta: f64, z: f64, depth: f64, tilt: f64) ->
     let p = point - normal * depth;
     let alpha = (-normal.x).atan2(normal.y) + tilt;
     let q = UnitQuaternion::from_axis_angle(&Vector3::z_axis(), alpha);
-    HandTarget {
+    Ok(HandTarget {
         position: p.into(),
         orientation: [q.w, q.i, q.j, q.k],
+    })
+}
+
+/// `t` moved `distance` (m) back along the probe's axis (its local `y`,
+/// out of the skin).
+fn lifted(t: HandTarget, distance: f64) -> HandTarget {
+    let [w, i, j, k] = t.orientation;
+    let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(w, i, j, k));
+    let up = q * Vector3::y();
+    let p = Vector3::from(t.position) + up * distance;
+    HandTarget {
+        position: p.into(),
+        ..t
     }
 }
 
@@ -162,7 +198,9 @@ impl LiveSystem {
             watchers: AtomicUsize::new(0),
             fault: Mutex::new(None),
         });
-        let target = target_on_surface(&scenario, 0.0, 0.0, LIFTED_DEPTH, 0.0);
+        let leg = physics.model().mesh().leg().cloned();
+        let target = target_on_surface(&scenario, leg.as_ref(), 0.0, 0.0, LIFTED_DEPTH, 0.0)
+            .map_err(anyhow::Error::msg)?;
         let imaging = ImagingThread::spawn(shared.clone(), &scenario)?;
         let inner = Inner {
             scenario,
@@ -170,6 +208,7 @@ impl LiveSystem {
             exam: false,
             target,
             placement: (0.0, 0.0, 0.0),
+            leg,
         };
         let system = Arc::new(LiveSystem {
             shared,
@@ -359,7 +398,8 @@ impl LiveSystem {
                 depth,
                 tilt,
             } => {
-                let t = target_on_surface(&inner.scenario, theta, z, depth, tilt);
+                let t =
+                    target_on_surface(&inner.scenario, inner.leg.as_ref(), theta, z, depth, tilt)?;
                 inner.target = t;
                 inner.placement = (theta, z, tilt);
                 if inner.exam {
@@ -371,8 +411,7 @@ impl LiveSystem {
                 Ok(())
             }
             LiveCommand::Lift => {
-                let mut t = inner.target;
-                t.position[1] += 0.03;
+                let t = lifted(inner.target, 0.03);
                 inner.target = t;
                 if let Some(s) = inner.session.as_mut() {
                     s.target.write(t);
@@ -409,7 +448,14 @@ impl LiveSystem {
                 // Lifted above where it was: the new session starts with
                 // the device at its target, out of contact.
                 let (theta, z, tilt) = inner.placement;
-                inner.target = target_on_surface(&inner.scenario, theta, z, LIFTED_DEPTH, tilt);
+                inner.target = target_on_surface(
+                    &inner.scenario,
+                    inner.leg.as_ref(),
+                    theta,
+                    z,
+                    LIFTED_DEPTH,
+                    tilt,
+                )?;
                 restart(self, inner, Keep::Nothing)
             }
         }

@@ -6,10 +6,11 @@ use crate::physics_side::{self, PhysicsSide};
 use crate::scenario::Scenario;
 use crate::section::{lateral_offset, section_deformation, SectionScratch};
 use anyhow::{Context, Result};
+use echothigh_anatomy::Levels;
 use echothigh_imaging::{
     Anatomy, FrameInput, ImagingConfig, Renderer, SectionDeformation, VeinState,
 };
-use echothigh_model::ThighGeometry;
+use echothigh_model::{LegSurface, ThighGeometry};
 use echothigh_transport::ProbeMsg;
 use nalgebra::Isometry3;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -30,12 +31,18 @@ pub(super) struct Publisher {
     bone_depth: f64,
     thigh: ThighGeometry,
     vessel_angle: f64,
+    /// The leg's `centre_s` (m) and levels, when the mesh follows one.
+    leg: Option<(f64, Levels)>,
     steps: u64,
     first: Option<f64>,
 }
 
 impl Publisher {
+    /// The publisher of `s`'s physics (its leg's levels when the mesh
+    /// follows a patient's leg; the scenario is validated, so the leg
+    /// builds).
     pub(super) fn new(shared: Arc<Shared>, s: &Scenario) -> Self {
+        let leg = LegSurface::new(&s.thigh, "thigh").ok().flatten();
         let img = s.imaging_config();
         let bone_depth = Anatomy::new(&img.anatomy, VeinState::Healthy)
             .map(|a| a.femur_top())
@@ -51,6 +58,7 @@ impl Publisher {
             bone_depth,
             thigh: s.thigh.clone(),
             vessel_angle: s.patient.vessel_angle,
+            leg: leg.map(|l| (s.thigh.centre_s, *l.anatomy().levels())),
             steps: 0,
             first: None,
         }
@@ -78,6 +86,11 @@ impl Publisher {
             snap.status.time = now;
             snap.status.probe_position = probe.position;
             snap.status.probe_orientation = probe.orientation;
+            if let Some((centre_s, levels)) = &self.leg {
+                let s = centre_s - probe.position[2];
+                snap.status.level_s = s;
+                snap.status.level = Some(levels.level_at(s));
+            }
             snap.status.physics_force = sample.force.into();
             snap.status.physics_rate = if now > first {
                 (self.steps - 1) as f64 / (now - first)

@@ -102,7 +102,7 @@ pub(super) fn start_session(
         .lock()
         .map_err(|_| anyhow::anyhow!("live state poisoned"))? = Some(status_out);
     let device = if exam {
-        let script = ExamScript::new(scenario.exam.clone()).map_err(anyhow::Error::msg)?;
+        let script = ExamScript::new(scenario.exam_script_config()?).map_err(anyhow::Error::msg)?;
         let hand = SimulatedHand::scripted(scenario.hand, script).map_err(anyhow::Error::msg)?;
         SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)?
     } else {
@@ -195,6 +195,9 @@ pub(super) fn start_session(
     let mut runner = LoopRunner::new(&loop_cfg).map_err(anyhow::Error::msg)?;
     let period = 1.0 / loop_cfg.rate_hz;
     let mut tick = HapticTick::new(device, source, scale, direct_physics.take(), period);
+    if exam {
+        tick.set_orientation(scenario.probe_orientation()?);
+    }
     if let Some(h) = tick.device_mut().hand_mut() {
         h.set_setpoint(start_setpoint, Vec3::zeros());
     }

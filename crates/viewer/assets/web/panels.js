@@ -106,6 +106,17 @@ function niceCeil(v) {
 }
 
 /** Fills the status table from a `state` message. */
+/** How a sonographer names the stretch of vein under the probe (runtime's `LegLevel`). */
+const LEVEL_NAMES = {
+  above_groin: 'above the groin (outside the thigh)',
+  common_femoral: 'common femoral vein (groin)',
+  saphenofemoral: 'saphenofemoral junction',
+  femoral_proximal: 'proximal femoral vein',
+  femoral_canal: 'femoral vein, adductor canal (mid-thigh)',
+  popliteal: 'popliteal vein (behind the knee)',
+  below_knee: 'below the knee (outside the model)',
+};
+
 export function showStatus(s, fps) {
   const set = (id, text) => { document.getElementById(id).textContent = text; };
   set('st-physics', `${s.physics_rate.toFixed(0)} Hz (set ${s.physics_rate_setting.toFixed(0)})`);
@@ -116,6 +127,7 @@ export function showStatus(s, fps) {
   set('st-time', `${s.time.toFixed(2)} s`);
   set('st-fps', `${fps.toFixed(0)} frames/s`);
   set('st-vein', s.vein ?? 'hidden (exam)');
+  set('st-level', s.level ? `${LEVEL_NAMES[s.level] ?? s.level}, ${(s.level_s * 100).toFixed(1)} cm below the groin` : '–');
   const fault = document.getElementById('fault');
   fault.hidden = !s.fault;
   fault.textContent = s.fault ? `Simulation stopped: ${s.fault}. Press Reset to restart it.` : '';

@@ -35,6 +35,8 @@ pub(super) fn sample_state() -> ViewState {
         physics_rate_setting: 100.0,
         latency_setting: 0.02,
         exam_playing: true,
+        level_s: 0.2,
+        level: Some(echothigh_runtime::live::LegLevel::FemoralCanal),
         ..Default::default()
     };
     let snap = LiveSnapshot {
@@ -151,6 +153,8 @@ fn sanitized_zeroes_every_non_finite_number_and_keeps_the_rest() {
         physics_rate_setting: f64::NAN,
         latency_setting: f64::INFINITY,
         exam_playing: true,
+        level_s: f64::NAN,
+        level: Some(echothigh_runtime::live::LegLevel::Popliteal),
     };
     let expected = LiveStatus {
         time: 0.0,
@@ -169,6 +173,8 @@ fn sanitized_zeroes_every_non_finite_number_and_keeps_the_rest() {
         physics_rate_setting: 0.0,
         latency_setting: 0.0,
         exam_playing: true,
+        level_s: 0.0,
+        level: Some(echothigh_runtime::live::LegLevel::Popliteal),
     };
     assert_eq!(status.sanitized(), expected);
     assert_eq!(expected.sanitized(), expected, "finite values must be kept");
