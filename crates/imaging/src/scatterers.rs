@@ -39,6 +39,28 @@ pub(crate) struct ScattererField {
     pub points: bool,
 }
 
+/// Half-width of the specular lobe (rad): a smooth interface tilted by `θ`
+/// sends its echo `2θ` off the beam's axis, and the receive aperture (F#
+/// 1.7: half-angle ≈ 16°) collects it only for `2θ ≲ 16°` (Szabo 2014,
+/// ch. 3, reflection at a specular interface).
+const SPECULAR_LOBE: f64 = 8.0 * std::f64::consts::PI / 180.0;
+/// Diffuse backscatter of the bone's surface relative to its specular echo
+/// (amplitude, −26 dB): a smooth cortex seen edge-on is about as bright as
+/// muscle (+22 − 26 dB).
+const SPECULAR_FLOOR: f64 = 0.05;
+
+/// Amplitude gain of a specular surface whose outward normal is `n`
+/// (lateral, depth; any length): `floor + (1 − floor) exp(−θ²/(2 θ₀²))`,
+/// `θ` the angle between `n` and the direction to the probe (−depth).
+pub(crate) fn specular_gain(n: (f64, f64)) -> f64 {
+    let len = n.0.hypot(n.1);
+    if len == 0.0 {
+        return 1.0;
+    }
+    let theta = (-n.1 / len).clamp(-1.0, 1.0).acos();
+    SPECULAR_FLOOR + (1.0 - SPECULAR_FLOOR) * (-0.5 * (theta / SPECULAR_LOBE).powi(2)).exp()
+}
+
 /// A straight line of connective tissue in the section (tissue coordinates, m).
 #[derive(Debug, Clone, Copy)]
 struct Line {
@@ -218,6 +240,10 @@ impl ScattererField {
             let tissue = anatomy.tissue_at(u, d);
             let db = anatomy.echo_db(tissue)?;
             let mut amp = 10f64.powf(db / 20.0);
+            if tissue == Tissue::Cortex {
+                let (fu, fd) = anatomy.femur_centre();
+                amp *= specular_gain((u - fu, d - fd));
+            }
             if matches!(tissue, Tissue::Fat | Tissue::Muscle) {
                 let list = &bands[((d / band) as usize).min(nb - 1)];
                 let boost = list
