@@ -1,6 +1,7 @@
 //! `echothigh bench image`: frame rate of the B-mode renderer at the
-//! configured size, on one core (the allocation-free serial path) and on all
-//! cores (rayon over image columns), under a press that varies every frame.
+//! default size (512 × 768) and at 256 × 384 for comparison, on one core
+//! (the allocation-free serial path) and on all cores (rayon over image
+//! columns), under a press that varies every frame.
 
 use anyhow::{Context, Result};
 use echothigh_imaging::{FrameInput, ImagingConfig, Renderer, SectionDeformation, VeinState};
@@ -82,10 +83,13 @@ fn run_mode(
     Ok(times)
 }
 
-/// Runs the benchmark.
-pub fn run(args: Args) -> Result<()> {
-    anyhow::ensure!(args.frames > 0, "--frames must be > 0");
-    let cfg = ImagingConfig::default();
+/// Times one frame size; returns its JSON report.
+fn bench_size(columns: usize, rows: usize, frames: usize) -> Result<serde_json::Value> {
+    let cfg = ImagingConfig {
+        columns,
+        rows,
+        ..Default::default()
+    };
     let mut r = Renderer::new(&cfg, VeinState::Healthy)?;
     let bone = r.anatomy().context("anatomy")?.femur_top();
     // A press going from 2 to 14 mm and back over 60 frames.
@@ -96,11 +100,9 @@ pub fn run(args: Args) -> Result<()> {
             SectionDeformation::flat_press(depth, cfg.probe_width, 1.5e-3, bone)
         })
         .collect::<Result<_, _>>()?;
-    let one = run_mode(&mut r, &presses, args.frames, false)?;
-    let all = run_mode(&mut r, &presses, args.frames, true)?;
-    let report = serde_json::json!({
-        "benchmark": "image",
-        "profile": if cfg!(debug_assertions) { "debug" } else { "release" },
+    let one = run_mode(&mut r, &presses, frames, false)?;
+    let all = run_mode(&mut r, &presses, frames, true)?;
+    Ok(serde_json::json!({
         "columns": cfg.columns,
         "rows": cfg.rows,
         "width_m": cfg.width,
@@ -108,20 +110,38 @@ pub fn run(args: Args) -> Result<()> {
         "scatterers": r.scatterer_count(),
         "one_core": timing(one, 1),
         "all_cores": timing(all, rayon::current_num_threads()),
-        "goal_fps_one_core": 60.0,
+    }))
+}
+
+/// Runs the benchmark.
+pub fn run(args: Args) -> Result<()> {
+    anyhow::ensure!(args.frames > 0, "--frames must be > 0");
+    let d = ImagingConfig::default();
+    let sizes = [(d.columns, d.rows), (256, 384)];
+    let reports = sizes
+        .iter()
+        .map(|&(c, r)| bench_size(c, r, args.frames))
+        .collect::<Result<Vec<_>>>()?;
+    let report = serde_json::json!({
+        "benchmark": "image",
+        "profile": if cfg!(debug_assertions) { "debug" } else { "release" },
+        "sizes": reports,
+        "goal_fps_one_core_default_size": 60.0,
     });
     let text = serde_json::to_string_pretty(&report)?;
     if args.json {
         println!("{text}");
     } else {
-        println!(
-            "image {}x{}: one core {:.0} fps (median), {} threads {:.0} fps",
-            cfg.columns,
-            cfg.rows,
-            report["one_core"]["fps_median"].as_f64().unwrap_or(0.0),
-            rayon::current_num_threads(),
-            report["all_cores"]["fps_median"].as_f64().unwrap_or(0.0)
-        );
+        for r in &reports {
+            println!(
+                "image {}x{}: one core {:.0} fps (median), {} threads {:.0} fps",
+                r["columns"],
+                r["rows"],
+                r["one_core"]["fps_median"].as_f64().unwrap_or(0.0),
+                rayon::current_num_threads(),
+                r["all_cores"]["fps_median"].as_f64().unwrap_or(0.0)
+            );
+        }
     }
     if let Some(path) = &args.out {
         std::fs::write(path, &text).with_context(|| format!("writing {}", path.display()))?;

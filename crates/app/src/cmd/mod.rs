@@ -3,4 +3,5 @@
 pub mod calibrate;
 pub mod image;
 pub mod net;
+pub mod psf;
 pub mod run;
