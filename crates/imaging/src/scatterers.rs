@@ -45,8 +45,8 @@ pub(crate) struct ScattererField {
 /// ch. 3, reflection at a specular interface).
 const SPECULAR_LOBE: f64 = 8.0 * std::f64::consts::PI / 180.0;
 /// Diffuse backscatter of the bone's surface relative to its specular echo
-/// (amplitude, −26 dB): a smooth cortex seen edge-on is about as bright as
-/// muscle (+22 − 26 dB).
+/// (amplitude, −26 dB): a smooth cortex seen edge-on is a little brighter
+/// than muscle (+35 − 26 dB) over its thin attenuated layer.
 const SPECULAR_FLOOR: f64 = 0.05;
 
 /// Amplitude gain of a specular surface whose outward normal is `n`
