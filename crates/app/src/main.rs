@@ -33,6 +33,8 @@ enum Command {
     Calibrate(cmd::calibrate::Args),
     /// Render B-mode echographic frames under the probe.
     Image(cmd::image::Args),
+    /// Measure the probe's point spread function on the point phantom.
+    Psf(cmd::psf::Args),
     /// Experiments: the paper's Fig. 4 and the rate, latency and damping sweeps.
     #[command(subcommand)]
     Experiment(echothigh_experiments::ExperimentCommand),
@@ -60,6 +62,7 @@ fn main() -> std::process::ExitCode {
         Command::Bench(b) => bench::run(b),
         Command::Calibrate(a) => cmd::calibrate::run(a),
         Command::Image(a) => cmd::image::run(a),
+        Command::Psf(a) => cmd::psf::run(a),
         Command::Experiment(c) => echothigh_experiments::run(c),
         #[cfg(feature = "viewer")]
         Command::View(a) => echothigh_viewer::run(a),

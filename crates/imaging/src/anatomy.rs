@@ -126,7 +126,8 @@ impl Anatomy {
         self.cfg.femur_top()
     }
 
-    fn femur_centre(&self) -> (f64, f64) {
+    /// The femur's centre `(lateral, depth)` in tissue coordinates (m).
+    pub fn femur_centre(&self) -> (f64, f64) {
         (
             self.cfg.femur_lateral,
             self.femur_top() + self.cfg.femur_radius,

@@ -7,20 +7,26 @@
 //!   thrombosis: multidisciplinary recommendations from the Society of
 //!   Radiologists in Ultrasound consensus conference", Circulation 137). Centre
 //!   frequency 7.5 MHz, speed of sound 1540 m/s (the scanners' convention).
-//! - **Resolution**: axial FWHM ≈ half the pulse length; a 2-cycle pulse at
-//!   7.5 MHz (λ = 0.205 mm) gives ≈ 0.2–0.4 mm; lateral FWHM at the focus
-//!   ≈ λ·F# ≈ 0.6–1 mm for F# 3–5 (Szabo 2014, "Diagnostic Ultrasound
-//!   Imaging: Inside Out", 2nd ed., ch. 6–7). Defaults 0.4 mm and 0.8 mm.
+//! - **Beam**: the array, its pulse and focusing are `[imaging.beam]`
+//!   ([`BeamConfig`], with its sources); the resolution follows from them
+//!   (axial FWHM ≈ 0.2 mm, lateral ≈ 0.4 mm at the 20 mm focus). The
+//!   default grid, 512 × 768 over 40 × 60 mm (78 µm pixels), carries
+//!   ≥ 2.5 pixels per axial FWHM.
 //! - **Attenuation compensated by the TGC**: soft tissue 0.5–0.7 dB/(cm·MHz)
 //!   (Duck 1990, "Physical Properties of Tissue", ch. 4; Goss, Johnston &
 //!   Dunn 1978, JASA 64). Default 0.65 dB/(cm·MHz).
-//! - **Dynamic range** 60 dB, the usual B-mode display setting.
+//! - **Dynamic range** 72 dB with white 25 dB above muscle: black at −47 dB,
+//!   so that the −25 to −40 dB fill of anechoic targets on scanners stays
+//!   visible (B-mode displays use 50–80 dB).
 //! - **Scatterer density**: fully developed speckle needs ≳ 10 scatterers per
 //!   resolution cell (Wagner et al. 1983, "Statistics of speckle in ultrasound
-//!   B-scans", IEEE Trans. Sonics Ultrason. 30(3)); the default 40 per mm²
-//!   puts ≈ 14 in the 2-D cell `2π σx σz` of the default PSF.
+//!   B-scans", IEEE Trans. Sonics Ultrason. 30(3)); the default 100 per mm²
+//!   puts ≈ 9 in the 2-D cell `2π σx σz` of the focal PSF (0.4 × 0.2 mm),
+//!   more elsewhere (the amplitudes are circular Gaussian, so the sum is
+//!   Gaussian whatever the count once it varies little between cells).
 
 use crate::anatomy_config::AnatomyConfig;
+use crate::beam_config::BeamConfig;
 use crate::error::ImagingError;
 use serde::{Deserialize, Serialize};
 
@@ -31,10 +37,20 @@ pub const FWHM_PER_SIGMA: f64 = 2.354_820_045_030_949;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ImagingConfig {
-    /// Image columns (lateral pixels, along the probe's width). Default 256.
+    /// Image columns (lateral pixels, along the probe's width). Default 512.
     pub columns: usize,
-    /// Image rows (axial pixels, depth). Default 384.
+    /// Image rows (axial pixels, depth). Default 768.
     pub rows: usize,
+    /// Columns of the live viewer's image ([`ImagingConfig::live`]): the
+    /// live path renders on one core and streams every frame to the browser
+    /// as a PNG, so it uses a coarser grid than `echothigh image`. Default 256
+    /// (156 µm pixels over 40 mm: the lateral FWHM, ≥ 0.4 mm, still spans
+    /// ≥ 2.5 pixels).
+    pub live_columns: usize,
+    /// Rows of the live viewer's image. Default 384 (156 µm over 60 mm: the
+    /// axial FWHM, 0.23 mm, spans 1.5 pixels; the envelope is still sampled
+    /// above its Nyquist rate, bandwidth ~1/FWHM).
+    pub live_rows: usize,
     /// Lateral field of view, centred on the probe (m). Default 0.040.
     /// Accepted: in 0.01 to 0.1 m (linear probe apertures).
     pub width: f64,
@@ -47,23 +63,18 @@ pub struct ImagingConfig {
     /// Speed of sound assumed by the scanner (m/s). Default 1540.
     /// Accepted: in 1400 to 1700 m/s (soft tissue 1450-1640, Duck 1990).
     pub sound_speed: f64,
-    /// Axial full width at half maximum of the PSF envelope (m). Default 0.4e-3.
-    /// Accepted: in 1e-5 to 0.01 m (a PSF of 10 um to 10 mm).
-    pub axial_fwhm: f64,
-    /// Lateral full width at half maximum of the PSF envelope (m). Default 0.8e-3.
-    /// Accepted: in 1e-5 to 0.01 m (a PSF of 10 um to 10 mm).
-    pub lateral_fwhm: f64,
     /// Attenuation slope compensated by the time-gain compensation
-    /// (dB/(cm·MHz), one way; the TGC applies twice this, round trip). Default 0.65.
+    /// (dB/(cm·MHz), one way; the TGC applies twice this, round trip), also
+    /// the tissue slope of the beam's spectral down-shift. Default 0.65.
     /// Accepted: in 0 to 2 dB/(cm MHz) (soft tissue 0.3-1.5, Duck 1990).
     pub tgc_attenuation: f64,
-    /// Displayed dynamic range of the log compression (dB). Default 60.
+    /// Displayed dynamic range of the log compression (dB). Default 72.
     /// Accepted: in 10 to 120 dB.
     pub dynamic_range: f64,
-    /// Level of white above the mean echo of muscle (dB). Default 26.
+    /// Level of white above the mean echo of muscle at the transmit focus (dB). Default 25.
     /// Accepted: in 0 to 80 dB.
     pub headroom: f64,
-    /// Scatterers per unit area of the section (1/m²). Default 4.0e7 (40 per mm²).
+    /// Scatterers per unit area of the section (1/m²). Default 1.0e8 (100 per mm²).
     /// Accepted: in 1e5 to 1e9 1/m^2 (0.1 to 1000 per mm^2).
     pub scatterer_density: f64,
     /// Seed of the scatterer generator (same seed, same image). Default 7.
@@ -89,6 +100,8 @@ pub struct ImagingConfig {
     /// no vessel). Default 0.050.
     /// Accepted: in 0 to 0.2 m (around the thigh: its half-circumference is ~0.25 m).
     pub pan_range: f64,
+    /// The probe's array, pulse and focusing (`[imaging.beam]`).
+    pub beam: BeamConfig,
     /// The anatomy of the section (`[imaging.anatomy]`).
     pub anatomy: AnatomyConfig,
 }
@@ -96,23 +109,24 @@ pub struct ImagingConfig {
 impl Default for ImagingConfig {
     fn default() -> Self {
         ImagingConfig {
-            columns: 256,
-            rows: 384,
+            columns: 512,
+            rows: 768,
+            live_columns: 256,
+            live_rows: 384,
             width: 0.040,
             depth: 0.060,
             center_frequency: 7.5e6,
             sound_speed: 1540.0,
-            axial_fwhm: 0.4e-3,
-            lateral_fwhm: 0.8e-3,
             tgc_attenuation: 0.65,
-            dynamic_range: 60.0,
-            headroom: 26.0,
-            scatterer_density: 4.0e7,
+            dynamic_range: 72.0,
+            headroom: 25.0,
+            scatterer_density: 1.0e8,
             seed: 7,
             max_indentation: 0.030,
             probe_width: 0.040,
             probe_elevation: 0.010,
             pan_range: 0.050,
+            beam: BeamConfig::default(),
             anatomy: AnatomyConfig::default(),
         }
     }
@@ -126,7 +140,12 @@ impl ImagingConfig {
 
     /// Checks every field, naming the offending key as `"{prefix}.{field}"`.
     pub fn validate(&self, prefix: &str) -> Result<(), ImagingError> {
-        for (field, n) in [("columns", self.columns), ("rows", self.rows)] {
+        for (field, n) in [
+            ("columns", self.columns),
+            ("rows", self.rows),
+            ("live_columns", self.live_columns),
+            ("live_rows", self.live_rows),
+        ] {
             if !(8..=Self::MAX_PIXELS_PER_SIDE).contains(&n) {
                 return Err(ImagingError::invalid(
                     prefix,
@@ -168,39 +187,19 @@ impl ImagingConfig {
             1700.0,
             "must be between 1400 and 1700 m/s (soft tissue 1450-1640, Duck 1990)",
         )?;
-        ImagingError::in_range(
-            prefix,
-            "axial_fwhm",
-            self.axial_fwhm,
-            1e-05,
-            0.01,
-            "must be between 1e-5 and 0.01 m (a PSF of 10 um to 10 mm)",
-        )?;
-        ImagingError::in_range(
-            prefix,
-            "lateral_fwhm",
-            self.lateral_fwhm,
-            1e-05,
-            0.01,
-            "must be between 1e-5 and 0.01 m (a PSF of 10 um to 10 mm)",
-        )?;
-        let dx = self.width / self.columns as f64;
-        let dz = self.depth / self.rows as f64;
-        if self.lateral_fwhm < dx || self.lateral_fwhm > 64.0 * dx {
-            return Err(ImagingError::invalid(
-                prefix,
-                "lateral_fwhm",
-                self.lateral_fwhm,
-                "must span 1 to 64 lateral pixels (width / columns)",
-            ));
-        }
-        if self.axial_fwhm < dz || self.axial_fwhm > 64.0 * dz {
-            return Err(ImagingError::invalid(
-                prefix,
-                "axial_fwhm",
-                self.axial_fwhm,
-                "must span 1 to 64 axial pixels (depth / rows)",
-            ));
+        for (field, n, live) in [
+            ("columns", self.columns, false),
+            ("live_columns", self.live_columns, true),
+        ] {
+            let c = if live { self.live() } else { self.clone() };
+            if c.pixel_width() > 1e-3 || c.pixel_depth() > 1e-3 {
+                return Err(ImagingError::invalid(
+                    prefix,
+                    field,
+                    n,
+                    "pixels must be at most 1 mm (width / columns, depth / rows) to carry the beam",
+                ));
+            }
         }
         ImagingError::in_range(
             prefix,
@@ -276,7 +275,18 @@ impl ImagingConfig {
                 "too many scatterers for the field (limit 2e7)",
             ));
         }
+        self.beam.validate(&format!("{prefix}.beam"))?;
         self.anatomy.validate(&format!("{prefix}.anatomy"))
+    }
+
+    /// The configuration of the live viewer's image: this one at
+    /// `live_columns × live_rows` (same field of view, beam and anatomy).
+    pub fn live(&self) -> ImagingConfig {
+        ImagingConfig {
+            columns: self.live_columns,
+            rows: self.live_rows,
+            ..self.clone()
+        }
     }
 
     /// Lateral pixel pitch (m).

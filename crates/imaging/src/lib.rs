@@ -10,9 +10,13 @@
 //!   [`VeinState`], the arterial pulse.
 //! - [`SectionDeformation`]: the skin displacement along the section from
 //!   the physics, carried into depth towards the femur (normal springs).
-//! - [`Renderer`]: scatterers fixed in tissue, complex-baseband PSF,
-//!   envelope, attenuation and TGC, log compression; allocation-free
-//!   [`Renderer::render_into`].
+//! - [`Renderer`]: scatterers fixed in tissue, complex-baseband PSF of a
+//!   focused linear array ([`BeamConfig`]: transmit focus, dynamic receive,
+//!   elevation slice, spectral down-shift; tabulated per depth once),
+//!   envelope, attenuation, clutter and electronic noise, TGC, log
+//!   compression; allocation-free [`Renderer::render_into`].
+//! - [`measure_psf`]: the standard point phantom's FWHM, focal gain and
+//!   side lobes; [`Phantom`]: points, speckle, cyst.
 //! - PNG output of a frame: [`write_gray_png`].
 //!
 //! ```
@@ -30,12 +34,16 @@
 
 mod anatomy;
 mod anatomy_config;
+mod beam;
+mod beam_config;
 mod config;
 mod deformation;
 mod error;
+mod measure;
 mod output;
 pub mod pressure;
 mod psf;
+mod pulse;
 mod render;
 mod scatterers;
 mod stages;
@@ -44,9 +52,11 @@ mod warp;
 
 pub use anatomy::{Anatomy, Vessel, MAX_BREAKPOINTS};
 pub use anatomy_config::{AnatomyConfig, VeinState, VeinStateParams, MMHG};
+pub use beam_config::BeamConfig;
 pub use config::{ImagingConfig, FWHM_PER_SIGMA};
 pub use deformation::{column_depth, SectionDeformation};
 pub use error::ImagingError;
+pub use measure::{axis_column, fwhm_samples, measure_psf, PsfAtDepth, PsfReport, POINT_DEPTHS};
 pub use output::write_gray_png;
 pub use render::{FrameInput, Lumen, LumenReport, Phantom, Renderer};
 pub use tissue::{Acoustics, Tissue};

@@ -1,61 +1,153 @@
 //! The pulse-echo point spread function in complex baseband, as tables.
 //!
-//! The RF echo of a point scatterer at depth `d` is a Gaussian-modulated
-//! cosine `g_x(x) g_z(z − d) cos(2 k₀ (z − d))`, `k₀ = 2π f₀ / c`, with
-//! Gaussian envelopes of standard deviations `σ_x = FWHM_x / 2.3548` and
-//! `σ_z = FWHM_z / 2.3548`. Demodulated at `f₀` (complex baseband, I/Q), its
-//! contribution at depth `z` is `g_x g_z(z − d) e^{−i 2 k₀ d}` up to a phase
-//! `e^{i 2 k₀ z}` common to every scatterer, which the envelope `|IQ|`
-//! ignores. The baseband needs no carrier sampling: a few taps per
-//! scatterer at the image's own pixel pitch.
+//! The echo of a scatterer at image depth `d`, lateral offset `x` from the
+//! line and elevation `y`, demodulated at `f₀` and read at depth `z`, is
+//! `e^{−i 2 k₀ d} p_z(z − d) h_z(x) w_z(y)`: the axial kernel of the
+//! down-shifted pulse ([`crate::pulse`]) times the lateral profile and the
+//! elevation weight of the focused array ([`crate::beam`]), both tabulated
+//! per depth once from the geometry (the separable approximation of a
+//! pulse-echo PSF, Szabo 2014, ch. 7). The baseband needs no carrier
+//! sampling: a few taps per scatterer at the image's own pixel pitch.
+//!
+//! Normalization: a unit point on the axis at the transmit focus gives an
+//! envelope of 1; elsewhere the envelope follows the beam (focal gain).
 
-use crate::config::{ImagingConfig, FWHM_PER_SIGMA};
+use crate::beam::{BeamProfiles, MAX_HALF_WIDTH};
+use crate::config::ImagingConfig;
+use crate::pulse::{AxialTables, Spectrum};
 use std::f64::consts::PI;
+use std::sync::{Arc, Mutex};
 
-/// Sub-pixel positions of the axial Gaussian table.
-pub(crate) const AXIAL_SUBSTEPS: usize = 64;
 /// Entries of the phase table (one turn).
 pub(crate) const PHASE_STEPS: usize = 4096;
+/// Rows per block of the lateral convolution (one half-width per block).
+pub(crate) const BLOCK_ROWS: usize = 16;
 
-/// Precomputed PSF tables of one image geometry.
-#[derive(Debug, Clone)]
+/// Precomputed PSF tables of one image geometry and probe.
+#[derive(Debug)]
 pub(crate) struct PsfTables {
-    /// Axial taps on each side of a scatterer (`⌈3 σ_z / Δz⌉`, ≥ 1).
-    pub axial_half: usize,
-    /// `axial[q · 2K + k]`: `g_z` at row offset `k − K + 1 − q/64` (pixels).
-    pub axial: Vec<f32>,
-    /// `lateral[k]`: `g_x((k − H) Δx)`, `k = 0..2H`.
+    /// Axial kernels per depth knot.
+    pub axial: AxialTables,
+    /// Largest lateral half-width (taps), the halo of the scatterer field.
+    pub lat_half: usize,
+    /// Lateral half-width of each block of `BLOCK_ROWS` rows.
+    pub block_half: Vec<usize>,
+    /// `lateral[(k + lat_half) · rows + i]`: lateral weight at offset `k`
+    /// columns for image row `i` (zero past the row's support).
     pub lateral: Vec<f32>,
+    /// Elevation weight per splat row (`row + pad`) for tissue (slice average).
+    pub elev_diffuse: Vec<f32>,
+    /// Elevation weight per splat row for point targets on the image plane.
+    pub elev_point: Vec<f32>,
+    /// Mean echo intensity of a unit-power medium of unit density (per m²)
+    /// at each image row (envelope² · m²), before attenuation.
+    pub speckle_unit: Vec<f64>,
+    /// The image row of the transmit focus (clamped into the image).
+    pub focus_row: usize,
     /// `phase[i] = e^{−i 2π i / 4096}` as `[re, im]`.
     pub phase: Vec<[f32; 2]>,
     /// Phase-table index per metre of depth: `2 k₀ / (2π) · 4096`.
     pub phase_per_metre: f64,
-    /// Mean echo intensity of muscle (0 dB, unit scatterer power) at the
-    /// default density: `ρ Δx σ_z √π Σ_k g_x[k]²` (envelope² units).
-    pub muscle_intensity: f64,
 }
 
 impl PsfTables {
+    /// Padding rows of the splat buffer above and below the image.
+    pub fn pad(&self) -> usize {
+        2 * self.axial.half
+    }
+
+    /// The tables of `cfg` (assumed validated), computed once per distinct
+    /// probe and image geometry in the process and shared.
+    pub fn shared(cfg: &ImagingConfig) -> Arc<PsfTables> {
+        type Cache = Mutex<Vec<(String, Arc<PsfTables>)>>;
+        static CACHE: Cache = Mutex::new(Vec::new());
+        let key = format!(
+            "{:?}",
+            (
+                &cfg.beam,
+                cfg.columns,
+                cfg.rows,
+                cfg.width.to_bits(),
+                cfg.depth.to_bits(),
+                cfg.center_frequency.to_bits(),
+                cfg.sound_speed.to_bits(),
+                cfg.tgc_attenuation.to_bits(),
+            )
+        );
+        // A poisoned cache only lost an insertion: recover its contents.
+        let mut cache = CACHE.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, t)) = cache.iter().find(|(k, _)| *k == key) {
+            return Arc::clone(t);
+        }
+        let t = Arc::new(Self::new(cfg));
+        if cache.len() >= 8 {
+            cache.remove(0);
+        }
+        cache.push((key, Arc::clone(&t)));
+        t
+    }
+
     /// Tables for `cfg` (assumed validated).
     pub fn new(cfg: &ImagingConfig) -> Self {
-        let dx = cfg.pixel_width();
-        let dz = cfg.pixel_depth();
-        let sx = cfg.lateral_fwhm / FWHM_PER_SIGMA / dx;
-        let sz = cfg.axial_fwhm / FWHM_PER_SIGMA / dz;
-        let k = ((3.0 * sz).ceil() as usize).max(1);
-        let h = ((3.0 * sx).ceil() as usize).max(1);
-        let mut axial = Vec::with_capacity(AXIAL_SUBSTEPS * 2 * k);
-        for q in 0..AXIAL_SUBSTEPS {
-            let frac = q as f64 / AXIAL_SUBSTEPS as f64;
-            for t in 0..2 * k {
-                let off = t as f64 - k as f64 + 1.0 - frac;
-                axial.push((-(off * off) / (2.0 * sz * sz)).exp() as f32);
+        let (dx, dz, rows) = (cfg.pixel_width(), cfg.pixel_depth(), cfg.rows);
+        let c = cfg.sound_speed;
+        let sp = Spectrum::new(
+            cfg.center_frequency,
+            cfg.beam.bandwidth,
+            cfg.beam.pulse_cycles,
+            cfg.tgc_attenuation,
+        );
+        let axial = AxialTables::new(&sp, dz, rows, c);
+        let pad = 2 * axial.half;
+        let cap = ((MAX_HALF_WIDTH / dx).ceil() as usize).clamp(1, 96);
+        let prof = BeamProfiles::new(&cfg.beam, &sp, c, cfg.depth, dx, cap);
+        let focus_z = cfg.beam.transmit_focus.min(cfg.depth - 0.5 * dz);
+        let lat_norm = BeamProfiles::interp(&column(&prof.lateral, 0), focus_z).abs();
+        let point_norm = BeamProfiles::interp(&prof.point, focus_z);
+        // Per-row lateral profiles, normalized, and their supports.
+        let mut rows_lat = vec![vec![0.0f64; cap + 1]; rows];
+        let mut support = vec![0usize; rows];
+        for (i, (lat, sup)) in rows_lat.iter_mut().zip(&mut support).enumerate() {
+            let z = (i as f64 + 0.5) * dz;
+            for (k, v) in lat.iter_mut().enumerate() {
+                *v = BeamProfiles::interp(&column(&prof.lateral, k), z) / lat_norm;
+            }
+            let peak = lat.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            *sup = lat.iter().rposition(|v| v.abs() > 1e-3 * peak).unwrap_or(0);
+        }
+        let block_half: Vec<usize> = support
+            .chunks(BLOCK_ROWS)
+            .map(|b| b.iter().copied().max().unwrap_or(0).max(1))
+            .collect();
+        let lat_half = block_half.iter().copied().max().unwrap_or(1);
+        let mut lateral = vec![0.0f32; (2 * lat_half + 1) * rows];
+        for (i, lat) in rows_lat.iter().enumerate() {
+            let h = block_half[i / BLOCK_ROWS];
+            for k in 0..=h {
+                let v = lat[k] as f32;
+                lateral[(lat_half + k) * rows + i] = v;
+                lateral[(lat_half - k) * rows + i] = v;
             }
         }
-        let lateral: Vec<f32> = (0..=2 * h)
-            .map(|t| {
-                let off = t as f64 - h as f64;
-                (-(off * off) / (2.0 * sx * sx)).exp() as f32
+        // Elevation weights per splat row; the diffuse weight equals the
+        // point weight at the transmit focus (the display reference).
+        let diffuse_norm = BeamProfiles::interp(&prof.diffuse, focus_z) / point_norm;
+        let splat_z = |r: usize| ((r as f64 - pad as f64 + 0.5) * dz).max(0.0);
+        let elev_point: Vec<f32> = (0..rows + 2 * pad)
+            .map(|r| (BeamProfiles::interp(&prof.point, splat_z(r)) / point_norm) as f32)
+            .collect();
+        let elev_diffuse: Vec<f32> = (0..rows + 2 * pad)
+            .map(|r| (BeamProfiles::interp(&prof.diffuse, splat_z(r)) / diffuse_norm) as f32)
+            .collect();
+        let speckle_unit = (0..rows)
+            .map(|i| {
+                let lat_e: f64 = (-(lat_half as i64)..=lat_half as i64)
+                    .map(|k| (lateral[(k + lat_half as i64) as usize * rows + i] as f64).powi(2))
+                    .sum::<f64>()
+                    * dx;
+                let w = elev_diffuse[i + pad] as f64;
+                let ax = axial.energy[axial.knot(i as f64)];
+                w * w * lat_e * ax
             })
             .collect();
         let phase = (0..PHASE_STEPS)
@@ -64,18 +156,31 @@ impl PsfTables {
                 [a.cos() as f32, a.sin() as f32]
             })
             .collect();
-        let k0 = 2.0 * PI * cfg.center_frequency / cfg.sound_speed;
-        let lateral_energy: f64 = lateral.iter().map(|&g| (g as f64).powi(2)).sum();
-        let sigma_z = cfg.axial_fwhm / FWHM_PER_SIGMA;
+        let k0 = 2.0 * PI * cfg.center_frequency / c;
         PsfTables {
-            axial_half: k,
             axial,
+            lat_half,
+            block_half,
             lateral,
+            elev_diffuse,
+            elev_point,
+            speckle_unit,
+            focus_row: ((focus_z / dz) as usize).min(rows - 1),
             phase,
             phase_per_metre: 2.0 * k0 / (2.0 * PI) * PHASE_STEPS as f64,
-            muscle_intensity: cfg.scatterer_density * dx * sigma_z * PI.sqrt() * lateral_energy,
         }
     }
+
+    /// Lateral weight at offset `k` columns (`|k| ≤ lat_half`) in image row `i`.
+    pub fn lateral_at(&self, k: i64, i: usize) -> f32 {
+        let rows = self.speckle_unit.len();
+        self.lateral[(k + self.lat_half as i64) as usize * rows + i]
+    }
+}
+
+/// Knot values of lateral tap `k`.
+fn column(lat: &[Vec<f64>], k: usize) -> Vec<f64> {
+    lat.iter().map(|l| l[k]).collect()
 }
 
 /// `log₂ x`, with `x` floored at 1e-30 (silence maps to −99.7, far below
@@ -96,16 +201,19 @@ mod tests {
     }
 
     #[test]
-    fn tables_peak_at_one_and_are_symmetric() {
-        let t = PsfTables::new(&ImagingConfig::default());
-        let h = t.lateral.len() / 2;
-        assert_eq!(t.lateral[h], 1.0);
-        for k in 0..h {
-            assert_eq!(t.lateral[k], t.lateral[2 * h - k]);
+    fn tables_are_symmetric_and_normalized_at_the_focus() {
+        let cfg = ImagingConfig::default();
+        let t = PsfTables::shared(&cfg);
+        let rows = cfg.rows;
+        for i in [10, rows / 3, rows - 1] {
+            for k in 1..=t.lat_half as i64 {
+                assert_eq!(t.lateral_at(k, i), t.lateral_at(-k, i));
+            }
         }
-        let k = t.axial_half;
-        // q = 0 (scatterer on a row centre): tap K − 1 is the peak.
-        assert_eq!(t.axial[k - 1], 1.0);
+        // Row of the focus: the axis weight is 1 within the interpolation
+        // between the row centre and the focus (half a row of 78 µm: < 1 %).
+        let f = t.focus_row;
+        assert!((t.lateral_at(0, f) - 1.0).abs() < 0.01);
         let p = t.phase[PHASE_STEPS / 4];
         assert!(p[0].abs() < 1e-6 && (p[1] + 1.0).abs() < 1e-6);
     }

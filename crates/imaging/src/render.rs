@@ -19,9 +19,13 @@ use crate::pressure::stress_under_rectangle;
 use crate::psf::PsfTables;
 use crate::scatterers::ScattererField;
 use crate::stages::{
-    compress_column, convolve_column, splat_column, FrameGeometry, LogCompression,
+    compress_column, convolve_column, splat_column, Additive, FrameGeometry, LogCompression,
 };
 use crate::warp::{compensated_ratio, VesselWarp};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use std::sync::Arc;
 
 /// What the application supplies each frame.
 #[derive(Debug, Clone, Copy)]
@@ -81,7 +85,24 @@ pub enum Phantom {
     },
     /// Unit point scatterers at `(column index, depth below the skin in m)`.
     Points(Vec<(usize, f64)>),
+    /// A uniform medium as [`Phantom::Uniform`] with an anechoic cylinder
+    /// (across the slice) of `radius` (m) centred on the image's axis at
+    /// `depth` (m).
+    Cyst {
+        /// Scatterers per m².
+        density: f64,
+        /// Generator seed.
+        seed: u64,
+        /// Depth of the centre below the skin (m).
+        depth: f64,
+        /// Radius (m).
+        radius: f64,
+    },
 }
+
+/// Columns of noise beyond the image's, over which the noise field rolls
+/// from frame to frame.
+const NOISE_ROLL: usize = 61;
 
 /// Renders B-mode frames of one anatomy (or phantom) and vein state.
 #[derive(Debug)]
@@ -89,8 +110,18 @@ pub struct Renderer {
     cfg: ImagingConfig,
     anatomy: Option<Anatomy>,
     field: ScattererField,
-    tables: PsfTables,
+    tables: Arc<PsfTables>,
     lc: LogCompression,
+    /// Unit-power diffuse clutter, column-major like `iq`.
+    clutter: Vec<[f32; 2]>,
+    /// RMS clutter amplitude per row.
+    clutter_amp: Vec<f32>,
+    /// Unit-power electronic noise over `columns + NOISE_ROLL` columns.
+    noise: Vec<[f32; 2]>,
+    /// RMS noise amplitude.
+    noise_amp: f32,
+    /// Noise column offset of the current frame.
+    noise_roll: usize,
     padded_rows: usize,
     pad: usize,
     /// Lateral centre of each window bin (m, image frame).
@@ -111,17 +142,31 @@ impl Renderer {
     pub fn new(cfg: &ImagingConfig, state: VeinState) -> Result<Self, ImagingError> {
         cfg.validate("imaging")?;
         let anatomy = Anatomy::new(&cfg.anatomy, state)?;
-        let field = ScattererField::from_anatomy(cfg, &anatomy);
-        Ok(Self::build(cfg, Some(anatomy), field))
+        let tables = PsfTables::shared(cfg);
+        let field = ScattererField::from_anatomy(cfg, tables.lat_half, &anatomy);
+        Ok(Self::build(cfg, Some(anatomy), field, tables))
     }
 
     /// A renderer of a phantom (speckle and PSF measurements).
     pub fn phantom(cfg: &ImagingConfig, phantom: &Phantom) -> Result<Self, ImagingError> {
         cfg.validate("imaging")?;
+        let tables = PsfTables::shared(cfg);
+        let halo = tables.lat_half;
         let field = match phantom {
             Phantom::Uniform { density, seed } => {
                 ImagingError::positive("phantom", "density", *density)?;
-                ScattererField::uniform(cfg, *density, *seed)
+                ScattererField::uniform(cfg, halo, *density, *seed)
+            }
+            Phantom::Cyst {
+                density,
+                seed,
+                depth,
+                radius,
+            } => {
+                ImagingError::positive("phantom", "density", *density)?;
+                ImagingError::positive("phantom", "depth", *depth)?;
+                ImagingError::positive("phantom", "radius", *radius)?;
+                ScattererField::cyst(cfg, halo, *density, *seed, (0.0, *depth), *radius)
             }
             Phantom::Points(p) => {
                 if p.iter()
@@ -132,15 +177,19 @@ impl Renderer {
                         reason: "columns must be < imaging.columns and depths finite and >= 0",
                     });
                 }
-                ScattererField::points(cfg, p)
+                ScattererField::points(cfg, halo, p)
             }
         };
-        Ok(Self::build(cfg, None, field))
+        Ok(Self::build(cfg, None, field, tables))
     }
 
-    fn build(cfg: &ImagingConfig, anatomy: Option<Anatomy>, field: ScattererField) -> Self {
-        let tables = PsfTables::new(cfg);
-        let pad = 2 * tables.axial_half;
+    fn build(
+        cfg: &ImagingConfig,
+        anatomy: Option<Anatomy>,
+        field: ScattererField,
+        tables: Arc<PsfTables>,
+    ) -> Self {
+        let pad = tables.pad();
         let padded_rows = cfg.rows + 2 * pad;
         let bins = cfg.columns + 2 * field.halo;
         let dx = cfg.pixel_width();
@@ -148,7 +197,23 @@ impl Renderer {
             .map(|b| -0.5 * cfg.width + (b as f64 - field.halo as f64 + 0.5) * dx)
             .collect();
         let dr = cfg.dynamic_range as f32;
-        let white = 10.0 * tables.muscle_intensity.log10() + cfg.headroom;
+        let muscle = cfg.scatterer_density * tables.speckle_unit[tables.focus_row];
+        let white = 10.0 * muscle.log10() + cfg.headroom;
+        // Clutter and noise fields: circular Gaussian, unit power, smoothed
+        // over [¼, ½, ¼] axially (the receive filter's band) and, for the
+        // clutter (echoes through the beam), laterally too.
+        let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed ^ 0x005e_edc1_u64);
+        let (cols, rows) = (cfg.columns, cfg.rows);
+        let clutter = smoothed_gaussian(&mut rng, cols, rows, true);
+        let noise = smoothed_gaussian(&mut rng, cols + NOISE_ROLL, rows, false);
+        let clutter_amp = tables
+            .speckle_unit
+            .iter()
+            .map(|&u| {
+                (cfg.scatterer_density * u * 10f64.powf(cfg.beam.clutter_db / 10.0)).sqrt() as f32
+            })
+            .collect();
+        let noise_amp = (muscle * 10f64.powf(cfg.beam.noise_db / 10.0)).sqrt() as f32;
         let lc = LogCompression {
             a: 10.0 * std::f32::consts::LOG10_2 * 255.0 / dr,
             b: (cfg.dynamic_range - white) as f32 * 255.0 / dr,
@@ -168,6 +233,11 @@ impl Renderer {
             anatomy,
             tables,
             lc,
+            clutter,
+            clutter_amp,
+            noise,
+            noise_amp,
+            noise_roll: 0,
             padded_rows,
             pad,
             bin_u,
@@ -288,6 +358,9 @@ impl Renderer {
         self.geometry.bone = def.bone_depth;
         let (pan_m, pan) = self.pan(input.lateral_offset);
         self.pan_columns = pan;
+        // Electronic noise changes from frame to frame (deterministically in time).
+        let tick = (input.time * 1e3).round().rem_euclid(1e6) as usize;
+        self.noise_roll = tick.wrapping_mul(2_654_435_761) % NOISE_ROLL;
         let ratios = self.lumens(input)?.map(|r| {
             (
                 r.vein.area / r.vein.rest_area,
@@ -314,13 +387,19 @@ impl Renderer {
     pub fn render_into(&mut self, input: &FrameInput, out: &mut [u8]) -> Result<(), ImagingError> {
         self.check_out(out)?;
         self.prepare(input)?;
-        let (t, g, f, pr) = (&self.tables, &self.geometry, &self.field, self.padded_rows);
+        let (t, g, f, pr) = (&*self.tables, &self.geometry, &self.field, self.padded_rows);
+        let elev = if f.points {
+            &t.elev_point[..]
+        } else {
+            &t.elev_diffuse[..]
+        };
         let w0 = self.window_start(self.pan_columns);
         for (b, col) in self.rf.chunks_mut(pr).enumerate() {
             let r = f.bin_start[w0 + b] as usize..f.bin_start[w0 + b + 1] as usize;
             splat_column(
                 t,
                 g,
+                elev,
                 &f.depth[r.clone()],
                 &f.amp[r],
                 self.surface[b],
@@ -334,6 +413,14 @@ impl Renderer {
         }
         let h = f.halo;
         let pan_m = self.pan_columns as f64 * self.cfg.pixel_width();
+        let adds = Additives {
+            clutter: &self.clutter,
+            clutter_amp: &self.clutter_amp,
+            noise: &self.noise,
+            noise_amp: self.noise_amp,
+            roll: self.noise_roll,
+            rows,
+        };
         for (j, (col, iq)) in self
             .gray
             .chunks_mut(rows)
@@ -349,6 +436,7 @@ impl Renderer {
                 self.surface[b],
                 &self.warps[b],
                 iq,
+                &adds.column(j),
                 col,
             );
         }
@@ -359,6 +447,28 @@ impl Renderer {
             }
         }
         Ok(())
+    }
+
+    /// The speckle cell area (m²) the PSF predicts at image row `row`: the
+    /// correlation area `∬ |R_h(Δx, Δz)|² / |R_h(0)|² dΔx dΔz` of the
+    /// intensity of a circular Gaussian field blurred by the PSF `h`
+    /// (`R_h` its autocorrelation; Wagner et al. 1983, eq. for `S_c`),
+    /// separable into lateral and axial factors, summed at the pixel pitch.
+    pub fn predicted_speckle_cell(&self, row: usize) -> f64 {
+        let t = &self.tables;
+        let row = row.min(self.cfg.rows - 1);
+        let h = t.lat_half as i64;
+        let lat: Vec<f64> = (-h..=h).map(|k| t.lateral_at(k, row) as f64).collect();
+        let ax = &t.axial;
+        let n = 2 * ax.half;
+        let base = ax.knot(row as f64) * crate::pulse::AXIAL_SUBSTEPS * n;
+        let axial: Vec<[f64; 2]> = ax.taps[base..base + n]
+            .iter()
+            .map(|p| [p[0] as f64, p[1] as f64])
+            .collect();
+        let lat_area = correlation_length(&lat.iter().map(|&v| [v, 0.0]).collect::<Vec<_>>());
+        let ax_area = correlation_length(&axial);
+        lat_area * self.cfg.pixel_width() * ax_area * self.cfg.pixel_depth()
     }
 
     /// Renders one frame into a new buffer (serial).
@@ -408,4 +518,98 @@ fn check_input(input: &FrameInput) -> Result<(), ImagingError> {
         });
     }
     Ok(())
+}
+
+/// The frame's clutter and noise fields, shared by the column stages.
+struct Additives<'a> {
+    clutter: &'a [[f32; 2]],
+    clutter_amp: &'a [f32],
+    noise: &'a [[f32; 2]],
+    noise_amp: f32,
+    roll: usize,
+    rows: usize,
+}
+
+impl<'a> Additives<'a> {
+    fn column(&self, j: usize) -> Additive<'a> {
+        let r = self.rows;
+        let n = (j + self.roll) * r;
+        Additive {
+            clutter: &self.clutter[j * r..(j + 1) * r],
+            clutter_amp: self.clutter_amp,
+            noise: &self.noise[n..n + r],
+            noise_amp: self.noise_amp,
+        }
+    }
+}
+
+/// `cols × rows` circular Gaussian samples (column-major) of unit mean
+/// power after smoothing by `[¼, ½, ¼]` along the rows and, if `lateral`,
+/// along the columns too (each pass divides the power by 3/8).
+fn smoothed_gaussian(
+    rng: &mut ChaCha8Rng,
+    cols: usize,
+    rows: usize,
+    lateral: bool,
+) -> Vec<[f32; 2]> {
+    let mut sample = || -> f32 { StandardNormal.sample(rng) };
+    let raw: Vec<[f32; 2]> = (0..cols * rows).map(|_| [sample(), sample()]).collect();
+    let at = |v: &[[f32; 2]], c: usize, r: usize| v[c * rows + r];
+    let mut ax = vec![[0.0f32; 2]; cols * rows];
+    for c in 0..cols {
+        for r in 0..rows {
+            let (a, b, d) = (
+                at(&raw, c, r.saturating_sub(1)),
+                at(&raw, c, r),
+                at(&raw, c, (r + 1).min(rows - 1)),
+            );
+            for q in 0..2 {
+                ax[c * rows + r][q] = 0.25 * a[q] + 0.5 * b[q] + 0.25 * d[q];
+            }
+        }
+    }
+    let mut power: f64 = 3.0 / 8.0 * 2.0; // two unit-variance quadratures
+    if lateral {
+        let mut lat = vec![[0.0f32; 2]; cols * rows];
+        for c in 0..cols {
+            for r in 0..rows {
+                let (a, b, d) = (
+                    at(&ax, c.saturating_sub(1), r),
+                    at(&ax, c, r),
+                    at(&ax, (c + 1).min(cols - 1), r),
+                );
+                for q in 0..2 {
+                    lat[c * rows + r][q] = 0.25 * a[q] + 0.5 * b[q] + 0.25 * d[q];
+                }
+            }
+        }
+        ax = lat;
+        power *= 3.0 / 8.0;
+    }
+    let scale = (1.0 / power).sqrt() as f32;
+    for v in &mut ax {
+        v[0] *= scale;
+        v[1] *= scale;
+    }
+    ax
+}
+
+/// `Σ_Δ |R(Δ)|² / |R(0)|²` (samples) of a sampled complex kernel, `R` its
+/// autocorrelation.
+fn correlation_length(h: &[[f64; 2]]) -> f64 {
+    let n = h.len() as i64;
+    let r = |d: i64| {
+        let mut acc = [0.0, 0.0];
+        for i in 0..n {
+            let j = i + d;
+            if (0..n).contains(&j) {
+                let (a, b) = (h[i as usize], h[j as usize]);
+                acc[0] += a[0] * b[0] + a[1] * b[1];
+                acc[1] += a[0] * b[1] - a[1] * b[0];
+            }
+        }
+        acc[0] * acc[0] + acc[1] * acc[1]
+    };
+    let r0 = r(0);
+    (-(n - 1)..n).map(|d| r(d) / r0).sum()
 }

@@ -1,9 +1,9 @@
 //! Scatterers fixed in tissue (material) coordinates, binned by image column.
 //!
-//! Each column of the image (plus a halo of `⌈3 σ_x / Δx⌉` columns on each
-//! side, so that the lateral PSF is complete at the edges, plus
+//! Each column of the image (plus a halo of the lateral PSF's half-width in
+//! columns on each side, so that the lateral PSF is complete at the edges, plus
 //! `pan_range / Δx` columns on each side, where the image window can pan
-//! to) owns a Poisson number of scatterers with uniform depths, sorted by
+//! to) owns scatterers at stratified random depths (see `generate`), sorted by
 //! depth. A scatterer
 //! carries a circular complex Gaussian amplitude whose power is the mean
 //! backscatter of its tissue (dB relative to muscle), modulated along
@@ -13,11 +13,11 @@
 //! is where the deformation acts. Same seed, same field.
 
 use crate::anatomy::Anatomy;
-use crate::config::{ImagingConfig, FWHM_PER_SIGMA};
+use crate::config::ImagingConfig;
 use crate::tissue::Tissue;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Poisson, StandardNormal};
+use rand_distr::StandardNormal;
 
 /// The binned scatterer field.
 #[derive(Debug, Clone)]
@@ -34,6 +34,31 @@ pub(crate) struct ScattererField {
     pub depth: Vec<f32>,
     /// Complex amplitude `[re, im]`.
     pub amp: Vec<[f32; 2]>,
+    /// Point targets on the image plane (elevation weight of the plane)
+    /// rather than tissue (elevation weight of the slice).
+    pub points: bool,
+}
+
+/// Half-width of the specular lobe (rad): a smooth interface tilted by `θ`
+/// sends its echo `2θ` off the beam's axis, and the receive aperture (F#
+/// 1.7: half-angle ≈ 16°) collects it only for `2θ ≲ 16°` (Szabo 2014,
+/// ch. 3, reflection at a specular interface).
+const SPECULAR_LOBE: f64 = 8.0 * std::f64::consts::PI / 180.0;
+/// Diffuse backscatter of the bone's surface relative to its specular echo
+/// (amplitude, −26 dB): a smooth cortex seen edge-on is a little brighter
+/// than muscle (+35 − 26 dB) over its thin attenuated layer.
+const SPECULAR_FLOOR: f64 = 0.05;
+
+/// Amplitude gain of a specular surface whose outward normal is `n`
+/// (lateral, depth; any length): `floor + (1 − floor) exp(−θ²/(2 θ₀²))`,
+/// `θ` the angle between `n` and the direction to the probe (−depth).
+pub(crate) fn specular_gain(n: (f64, f64)) -> f64 {
+    let len = n.0.hypot(n.1);
+    if len == 0.0 {
+        return 1.0;
+    }
+    let theta = (-n.1 / len).clamp(-1.0, 1.0).acos();
+    SPECULAR_FLOOR + (1.0 - SPECULAR_FLOOR) * (-0.5 * (theta / SPECULAR_LOBE).powi(2)).exp()
 }
 
 /// A straight line of connective tissue in the section (tissue coordinates, m).
@@ -85,16 +110,10 @@ fn lines(
 }
 
 impl ScattererField {
-    /// Halo columns of `cfg` on each side of the image.
-    pub fn halo(cfg: &ImagingConfig) -> usize {
-        ((3.0 * cfg.lateral_fwhm / FWHM_PER_SIGMA / cfg.pixel_width()).ceil() as usize).max(1)
-    }
-
-    /// Lateral geometry of `cfg`: (halo, pan, bins, centre of bin 0 in m,
-    /// anatomy frame).
-    fn bins(cfg: &ImagingConfig) -> (usize, usize, usize, f64) {
+    /// Lateral geometry of `cfg` with `halo` columns each side: (halo, pan,
+    /// bins, centre of bin 0 in m, anatomy frame).
+    fn bins(cfg: &ImagingConfig, halo: usize) -> (usize, usize, usize, f64) {
         let dx = cfg.pixel_width();
-        let halo = Self::halo(cfg);
         let pan = cfg.pan_columns();
         let bins = cfg.columns + 2 * halo + 2 * pan;
         let u_first = -0.5 * cfg.width + (0.5 - halo as f64 - pan as f64) * dx;
@@ -103,34 +122,47 @@ impl ScattererField {
 
     /// Deepest populated tissue depth (m).
     fn max_depth(cfg: &ImagingConfig) -> f64 {
-        cfg.depth + cfg.max_indentation + 2.0 * cfg.axial_fwhm
+        cfg.depth + cfg.max_indentation + 1e-3
     }
 
     /// Fills every bin with `density` scatterers per m²; `amplitude(u, d)`
     /// gives each one's RMS amplitude (or `None` to drop it).
     fn generate(
         cfg: &ImagingConfig,
+        halo: usize,
         density: f64,
         rng: &mut ChaCha8Rng,
         mut amplitude: impl FnMut(f64, f64) -> Option<f64>,
     ) -> Self {
-        let (halo, pan, bins, u_first) = Self::bins(cfg);
+        let (halo, pan, bins, u_first) = Self::bins(cfg, halo);
         let dx = cfg.pixel_width();
         let dmax = Self::max_depth(cfg);
-        // A non-positive or non-finite rate leaves the field empty.
-        let poisson = Poisson::new(density * dx * dmax).ok();
+        // Stratified depths: a column of mean count λ = ρ Δx d_max gets
+        // ⌊λ⌋ or ⌈λ⌉ scatterers (the mean kept exact), one per stratum of
+        // d_max / n at a uniform position within it. The sum under the PSF
+        // then varies far less from cell to cell than with Poisson
+        // positions, whose compound statistics would lower the speckle SNR
+        // below the Rayleigh 1.91 unless ≳ 30 scatterers fill each cell;
+        // sparse fields (≲ 1 per cell) stay sparse. A non-positive or
+        // non-finite rate leaves the field empty.
+        let lambda = density * dx * dmax;
+        let lambda = if lambda.is_finite() && lambda > 0.0 {
+            lambda
+        } else {
+            0.0
+        };
         let mut bin_start = Vec::with_capacity(bins + 1);
         let mut depth = Vec::new();
         let mut amp = Vec::new();
         let mut col: Vec<(f32, [f32; 2])> = Vec::new();
         for b in 0..bins {
             bin_start.push(depth.len() as u32);
-            let n: f64 = poisson.as_ref().map_or(0.0, |p| p.sample(rng));
+            let n = lambda.floor() as usize + usize::from(rng.gen::<f64>() < lambda.fract());
             col.clear();
             let uc = u_first + b as f64 * dx;
-            for _ in 0..n as usize {
+            for k in 0..n {
                 let u = uc + dx * (rng.gen::<f64>() - 0.5);
-                let d = dmax * rng.gen::<f64>();
+                let d = dmax * (k as f64 + rng.gen::<f64>()) / n as f64;
                 let re: f64 = rng.sample(StandardNormal);
                 let im: f64 = rng.sample(StandardNormal);
                 if let Some(a) = amplitude(u, d) {
@@ -151,11 +183,12 @@ impl ScattererField {
             bin_start,
             depth,
             amp,
+            points: false,
         }
     }
 
     /// The scatterers of `anatomy`, at the density of `cfg`, seeded by `cfg.seed`.
-    pub fn from_anatomy(cfg: &ImagingConfig, anatomy: &Anatomy) -> Self {
+    pub fn from_anatomy(cfg: &ImagingConfig, halo: usize, anatomy: &Anatomy) -> Self {
         let a = anatomy.config();
         let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
         let half = 0.5 * cfg.width + cfg.pan_columns() as f64 * cfg.pixel_width() + 2e-3;
@@ -203,10 +236,14 @@ impl ScattererField {
                 list.push(i as u32);
             }
         }
-        Self::generate(cfg, cfg.scatterer_density, &mut rng, |u, d| {
+        Self::generate(cfg, halo, cfg.scatterer_density, &mut rng, |u, d| {
             let tissue = anatomy.tissue_at(u, d);
             let db = anatomy.echo_db(tissue)?;
             let mut amp = 10f64.powf(db / 20.0);
+            if tissue == Tissue::Cortex {
+                let (fu, fd) = anatomy.femur_centre();
+                amp *= specular_gain((u - fu, d - fd));
+            }
             if matches!(tissue, Tissue::Fat | Tissue::Muscle) {
                 let list = &bands[((d / band) as usize).min(nb - 1)];
                 let boost = list
@@ -222,15 +259,32 @@ impl ScattererField {
     }
 
     /// A homogeneous medium of `density` scatterers per m² with unit power.
-    pub fn uniform(cfg: &ImagingConfig, density: f64, seed: u64) -> Self {
+    pub fn uniform(cfg: &ImagingConfig, halo: usize, density: f64, seed: u64) -> Self {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        Self::generate(cfg, density, &mut rng, |_, _| Some(1.0))
+        Self::generate(cfg, halo, density, &mut rng, |_, _| Some(1.0))
+    }
+
+    /// As [`uniform`](Self::uniform), without scatterers inside the circle
+    /// of `radius` (m) about `(u, d)` (lateral, depth below the skin; m): an
+    /// anechoic cylinder across the slice, as the cysts of tissue phantoms.
+    pub fn cyst(
+        cfg: &ImagingConfig,
+        halo: usize,
+        density: f64,
+        seed: u64,
+        centre: (f64, f64),
+        radius: f64,
+    ) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        Self::generate(cfg, halo, density, &mut rng, |u, d| {
+            ((u - centre.0).hypot(d - centre.1) > radius).then_some(1.0)
+        })
     }
 
     /// Unit point scatterers at `(column, depth)` (image column index at
     /// zero pan, depth in m).
-    pub fn points(cfg: &ImagingConfig, points: &[(usize, f64)]) -> Self {
-        let (halo, pan, bins, _) = Self::bins(cfg);
+    pub fn points(cfg: &ImagingConfig, halo: usize, points: &[(usize, f64)]) -> Self {
+        let (halo, pan, bins, _) = Self::bins(cfg, halo);
         let mut sorted: Vec<(usize, f64)> =
             points.iter().map(|&(c, d)| (c + halo + pan, d)).collect();
         sorted.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
@@ -253,6 +307,7 @@ impl ScattererField {
             bin_start,
             depth,
             amp,
+            points: true,
         }
     }
 

@@ -4,7 +4,8 @@
 
 use crate::anatomy::{Anatomy, MAX_BREAKPOINTS};
 use crate::deformation::column_depth;
-use crate::psf::{safe_log2, PsfTables, AXIAL_SUBSTEPS, PHASE_STEPS};
+use crate::psf::{safe_log2, PsfTables, BLOCK_ROWS, PHASE_STEPS};
+use crate::pulse::AXIAL_SUBSTEPS;
 use crate::warp::VesselWarp;
 
 /// Frame-wide quantities the column stages read.
@@ -36,10 +37,13 @@ pub(crate) fn image_depth(
 }
 
 /// Adds the axial PSF of each scatterer of one bin into its padded column
-/// `out` (`rows + 2·pad` complex samples, cleared first).
+/// `out` (`rows + 2·pad` complex samples, cleared first), weighted by the
+/// elevation weight `elev` of its splat row (`row + pad`).
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn splat_column(
     t: &PsfTables,
     g: &FrameGeometry,
+    elev: &[f32],
     depth: &[f32],
     amp: &[[f32; 2]],
     surface: f64,
@@ -47,12 +51,14 @@ pub(crate) fn splat_column(
     out: &mut [[f32; 2]],
 ) {
     out.fill([0.0, 0.0]);
-    let k = t.axial_half;
+    let ax = &t.axial;
+    let k = ax.half;
     let taps = 2 * k;
     let inv_dz = 1.0 / g.dz;
     let lowest = -(k as f64) - 1.0;
     let highest = (g.rows + k) as f64;
     let any_warp = warps[0].is_active() || warps[1].is_active();
+    let last = elev.len() as i64 - 1;
     for (&d, a) in depth.iter().zip(amp) {
         let d = d as f64;
         let z = if any_warp {
@@ -70,19 +76,26 @@ pub(crate) fn splat_column(
         let fl = r.floor();
         let q = (((r - fl) * AXIAL_SUBSTEPS as f64) as usize).min(AXIAL_SUBSTEPS - 1);
         let p = t.phase[((z * t.phase_per_metre) as i64 & (PHASE_STEPS as i64 - 1)) as usize];
-        let c = [a[0] * p[0] - a[1] * p[1], a[0] * p[1] + a[1] * p[0]];
+        let e = elev[(fl as i64 + g.pad as i64).clamp(0, last) as usize];
+        let c = [
+            e * (a[0] * p[0] - a[1] * p[1]),
+            e * (a[0] * p[1] + a[1] * p[0]),
+        ];
         // First tap: row fl − K + 1, at index fl − K + 1 + pad ≥ 0.
         let first = (fl as i64 - k as i64 + 1 + g.pad as i64) as usize;
-        let w = &t.axial[q * taps..(q + 1) * taps];
-        for (o, &wk) in out[first..first + taps].iter_mut().zip(w) {
-            o[0] += c[0] * wk;
-            o[1] += c[1] * wk;
+        let base = (ax.knot(r) * AXIAL_SUBSTEPS + q) * taps;
+        let w = &ax.taps[base..base + taps];
+        for (o, wk) in out[first..first + taps].iter_mut().zip(w) {
+            o[0] += c[0] * wk[0] - c[1] * wk[1];
+            o[1] += c[0] * wk[1] + c[1] * wk[0];
         }
     }
 }
 
-/// Output column `j` of the lateral convolution: `Σ_k g_x[k] rf[j + k]`
-/// over the padded bins, unpadded rows.
+/// Output column `j` of the lateral convolution with the depth-dependent
+/// lateral profile: `out[i] = Σ_k h_i[k] rf[j + H + k][i]` over the padded
+/// bins (`H` the halo), unpadded rows, each block of rows over its own
+/// half-width.
 pub(crate) fn convolve_column(
     t: &PsfTables,
     rf: &[[f32; 2]],
@@ -93,14 +106,36 @@ pub(crate) fn convolve_column(
 ) {
     out.fill([0.0, 0.0]);
     let rows = out.len();
-    for (k, &w) in t.lateral.iter().enumerate() {
-        let start = (j + k) * padded_rows + pad;
-        let src = &rf[start..start + rows];
-        for (o, s) in out.iter_mut().zip(src) {
-            o[0] += w * s[0];
-            o[1] += w * s[1];
+    let hh = t.lat_half as i64;
+    for (blk, chunk) in out.chunks_mut(BLOCK_ROWS).enumerate() {
+        let h = t.block_half[blk] as i64;
+        let i0 = blk * BLOCK_ROWS;
+        let n = chunk.len();
+        for k in -h..=h {
+            let w = &t.lateral[(k + hh) as usize * rows + i0..][..n];
+            let start = (j as i64 + hh + k) as usize * padded_rows + pad + i0;
+            let src = &rf[start..start + n];
+            for ((o, s), &wk) in chunk.iter_mut().zip(src).zip(w) {
+                o[0] += wk * s[0];
+                o[1] += wk * s[1];
+            }
         }
     }
+}
+
+/// The additive echoes of one column that do not come from its scatterers:
+/// diffuse clutter (scaled per row, attenuated like tissue echoes) and
+/// electronic noise (after the attenuation, before the TGC).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Additive<'a> {
+    /// Unit-power clutter field of the column.
+    pub clutter: &'a [[f32; 2]],
+    /// RMS clutter amplitude per row (envelope units).
+    pub clutter_amp: &'a [f32],
+    /// Unit-power noise field of the column.
+    pub noise: &'a [[f32; 2]],
+    /// RMS noise amplitude (envelope units).
+    pub noise_amp: f32,
 }
 
 /// Display mapping: `gray = a log₂ I + b + c · gain_dB`, clamped to [0, 255].
@@ -118,10 +153,12 @@ pub(crate) struct LogCompression {
     pub tgc: f64,
 }
 
-/// Round-trip attenuation minus TGC along one column, and the log
-/// compression of its envelope into `gray`.
+/// Round-trip attenuation, added clutter and noise, TGC along one column,
+/// and the log compression of its envelope into `gray`.
 ///
-/// Gain at image depth `z`: `2 f (α_TGC z − ∫₀^z α(z') dz')` dB, with `α` the
+/// The received echo at image depth `z` is `(iq + clutter) · 10^{−A/20} + noise`,
+/// `A = 2 f ∫₀^z α(z') dz'` dB, displayed with the TGC gain `2 f α_TGC z` dB;
+/// `α` is the
 /// attenuation slope of the tissue met along the beam (piecewise constant
 /// between the anatomy's breakpoints, carried by the deformation). Bone
 /// attenuates ≈ 30 times more than soft tissue, which makes its shadow;
@@ -135,6 +172,7 @@ pub(crate) fn compress_column(
     surface: f64,
     warps: &[VesselWarp; 2],
     iq: &[[f32; 2]],
+    add: &Additive,
     gray: &mut [u8],
 ) {
     // Breakpoints mapped to image depth (m, cm) and the slope after each.
@@ -168,6 +206,7 @@ pub(crate) fn compress_column(
         slope = alpha[seg];
         seg += 1;
     }
+    let db_to_np = std::f64::consts::LN_10 / 20.0;
     for (i, (px, out)) in iq.iter().zip(gray.iter_mut()).enumerate() {
         let zi = (i as f64 + 0.5) * g.dz;
         while seg < n && z[seg] <= zi {
@@ -177,9 +216,12 @@ pub(crate) fn compress_column(
             seg += 1;
         }
         let att = acc + slope * (zi - z_at) * 100.0;
-        let gain = 2.0 * lc.f_mhz * (lc.tgc * zi * 100.0 - att);
-        let intensity = px[0] * px[0] + px[1] * px[1];
-        let level = lc.a * safe_log2(intensity) + lc.b + lc.c * gain as f32;
+        let loss = (-2.0 * lc.f_mhz * att * db_to_np).exp() as f32;
+        let gain = 2.0 * lc.f_mhz * lc.tgc * zi * 100.0;
+        let (c, ca, nz) = (add.clutter[i], add.clutter_amp[i], add.noise[i]);
+        let re = (px[0] + ca * c[0]) * loss + add.noise_amp * nz[0];
+        let im = (px[1] + ca * c[1]) * loss + add.noise_amp * nz[1];
+        let level = lc.a * safe_log2(re * re + im * im) + lc.b + lc.c * gain as f32;
         *out = level.clamp(0.0, 255.0).round() as u8;
     }
 }

@@ -59,7 +59,13 @@ impl Tissue {
             Tissue::VeinLumen => (Some(-50.0), 0.15),
             Tissue::ArteryWall => (Some(6.0), 0.8),
             Tissue::ArteryLumen => (Some(-50.0), 0.15),
-            Tissue::Cortex => (Some(22.0), 20.0),
+            // The bone–soft-tissue interface reflects ≈ 64 % of the incident
+            // amplitude (Z ≈ 7.4 vs 1.6 MRayl, Duck 1990), far above tissue
+            // backscatter; the cortex's attenuation confines its echo to
+            // the first ≈ 0.2 mm, so the layer is set +35 dB to show as the
+            // saturated white line of scans (only where it faces the beam:
+            // `scatterers::specular_gain`).
+            Tissue::Cortex => (Some(35.0), 20.0),
             Tissue::Marrow => (None, 20.0),
         };
         Acoustics {

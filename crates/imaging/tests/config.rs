@@ -14,7 +14,7 @@ fn defaults_validate_and_round_trip() {
         toml::from_str("columns = 128\n[anatomy]\nvein_diameter = 0.009\n").unwrap();
     assert_eq!(partial.columns, 128);
     assert_eq!(partial.anatomy.vein_diameter, 0.009);
-    assert_eq!(partial.rows, 384);
+    assert_eq!(partial.rows, 768);
 }
 
 #[test]
@@ -62,10 +62,13 @@ fn bad_values_name_their_key() {
         ),
         (
             ImagingConfig {
-                axial_fwhm: 1e-6,
+                beam: BeamConfig {
+                    transmit_focus: -0.02,
+                    ..Default::default()
+                },
                 ..Default::default()
             },
-            "imaging.axial_fwhm",
+            "imaging.beam.transmit_focus",
         ),
         (
             ImagingConfig {

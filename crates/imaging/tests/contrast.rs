@@ -62,3 +62,34 @@ fn enhancement_below_the_vein() {
         below - beside
     );
 }
+
+#[test]
+fn the_femoral_cortex_is_specular() {
+    // Issue 21: bright where its normal faces the beam, ≥ 20 dB dimmer where
+    // it is parallel to it. Boxes of 0.6 mm just inside the cortex's outer
+    // surface (where each beam line meets the bone first), at the polar
+    // angle θ of the surface normal from the beam axis: θ = 0 (top) and
+    // θ = 70° (the flank, near grazing), each relative to muscle at the same
+    // depth away from the vessels, so that the beam's depth dependence
+    // (focus, attenuation, TGC) cancels.
+    let cfg = ImagingConfig::default();
+    let mut r = Renderer::new(&cfg, VeinState::Healthy).unwrap();
+    let (frame, _) = render_force(&mut r, 0.0, 0.0);
+    let a = cfg.anatomy.clone();
+    let (fu, rad) = (a.femur_lateral, a.femur_radius);
+    let fd = a.femur_top() + rad;
+    let relative = |theta: f64| {
+        let rho = rad - 0.4e-3;
+        let (u, d) = (fu + rho * theta.sin(), fd - rho * theta.cos());
+        let h = 0.3e-3;
+        let band = (d - h, d + h);
+        mean_db(&cfg, &frame, (u - h, u + h), band)
+            - mean_db(&cfg, &frame, (-19e-3, -16e-3), (d - 1e-3, d + 1e-3))
+    };
+    let facing = relative(0.0);
+    let parallel = relative(70f64.to_radians());
+    assert!(
+        facing - parallel >= 20.0,
+        "cortex facing the beam {facing:.1} dB, near parallel {parallel:.1} dB (re muscle)"
+    );
+}

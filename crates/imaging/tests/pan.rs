@@ -7,10 +7,18 @@ mod common;
 use common::*;
 use echothigh_imaging::*;
 
+/// A small frame without clutter and noise: those are fixed to the probe
+/// (body-wall reverberation, electronics), not to the tissue, so only the
+/// tissue echoes pan exactly.
 fn small() -> ImagingConfig {
     ImagingConfig {
         columns: 128,
         rows: 192,
+        beam: BeamConfig {
+            noise_db: -200.0,
+            clutter_db: -200.0,
+            ..Default::default()
+        },
         ..ImagingConfig::default()
     }
 }

@@ -12,16 +12,24 @@ fn rest_input(d: &SectionDeformation) -> FrameInput<'_> {
     }
 }
 
-/// Envelope samples of a uniform phantom, decimated by about one speckle
-/// cell (so that samples are nearly independent).
+/// Rows of the homogeneous band about the transmit focus (17–23 mm), where
+/// the mean echo varies by < 1 dB.
+fn band(cfg: &ImagingConfig) -> std::ops::Range<usize> {
+    let row = |z: f64| (z / cfg.pixel_depth()) as usize;
+    row(0.017)..row(0.023)
+}
+
+/// Envelope samples of a uniform phantom in the focal band, decimated to
+/// independence (8 columns ≈ 0.62 mm ≈ 1.5 lateral FWHM, 4 rows ≈ 0.31 mm
+/// ≈ 1.4 axial FWHM: the intensity correlation `|R_h|²` there is < 5 %).
 fn envelope_samples(density: f64, seed: u64) -> Vec<f64> {
     let cfg = ImagingConfig::default();
     let mut r = Renderer::phantom(&cfg, &Phantom::Uniform { density, seed }).unwrap();
     let d = SectionDeformation::rest(1.0);
     r.render(&rest_input(&d)).unwrap();
     let mut v = Vec::new();
-    for j in (8..cfg.columns - 8).step_by(6) {
-        for i in (8..cfg.rows - 8).step_by(4) {
+    for j in (8..cfg.columns - 8).step_by(8) {
+        for i in band(&cfg).step_by(4) {
             v.push(r.envelope(j, i) as f64);
         }
     }
@@ -53,9 +61,19 @@ fn rayleigh_ks(v: &[f64]) -> f64 {
 
 #[test]
 fn fully_developed_speckle_is_rayleigh() {
-    let v = envelope_samples(ImagingConfig::default().scatterer_density, 11);
+    let density = ImagingConfig::default().scatterer_density;
+    let v: Vec<f64> = (11..16)
+        .flat_map(|seed| envelope_samples(density, seed))
+        .collect();
     let snr = mean_over_std(&v);
-    assert!((snr - 1.91).abs() < 0.1, "mean/std = {snr}");
+    // Tolerance from the number of independent cells N: for a Rayleigh
+    // envelope var(μ̂)/μ² = 1/(N SNR²) = 0.274/N and var(σ̂)/σ² ≈ (κ − 1)/(4N)
+    // with the kurtosis κ = 3.245, so the SNR's relative SD is
+    // ≈ √(0.835/N); allow 4 SD (and never more than issue 21's ±0.1).
+    let sd = 1.91 * (0.835 / v.len() as f64).sqrt();
+    let tol = 4.0 * sd;
+    assert!(tol <= 0.1, "too few samples: tolerance {tol}");
+    assert!((snr - 1.91).abs() < tol, "mean/std = {snr} (±{tol})");
     // KS at the 1 % level: D < 1.63 / √n.
     let d = rayleigh_ks(&v);
     let crit = 1.63 / (v.len() as f64).sqrt();
@@ -73,56 +91,6 @@ fn sparse_scatterers_are_not_fully_developed() {
         d > 1.63 / (v.len() as f64).sqrt(),
         "sparse speckle passed the Rayleigh test: {d}"
     );
-}
-
-/// Full width at half maximum of a sampled profile (pixels), with the
-/// half-maximum crossings interpolated linearly in log amplitude (exact for
-/// a Gaussian between two samples on the same side).
-fn fwhm(p: &[f64]) -> f64 {
-    let (k, &m) = p
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .unwrap();
-    let half = 0.5 * m;
-    let cross = |a: usize, b: usize| {
-        let (la, lb) = (p[a].ln(), p[b].ln());
-        a as f64 + (half.ln() - la) / (lb - la) * (b as f64 - a as f64)
-    };
-    let mut r = k;
-    while p[r + 1] > half {
-        r += 1;
-    }
-    let mut l = k;
-    while p[l - 1] > half {
-        l -= 1;
-    }
-    cross(r, r + 1) - cross(l, l - 1)
-}
-
-#[test]
-fn psf_fwhm_matches_the_configured_resolution() {
-    for (ax, lat) in [(0.4e-3, 0.8e-3), (0.6e-3, 1.2e-3), (0.3e-3, 0.5e-3)] {
-        let cfg = ImagingConfig {
-            axial_fwhm: ax,
-            lateral_fwhm: lat,
-            ..Default::default()
-        };
-        let (col, row) = (128, 192);
-        // Slightly off the row centre: sub-pixel positions must not matter.
-        let depth = (row as f64 + 0.5 + 0.3) * cfg.pixel_depth();
-        let mut r = Renderer::phantom(&cfg, &Phantom::Points(vec![(col, depth)])).unwrap();
-        let d = SectionDeformation::rest(1.0);
-        r.render(&rest_input(&d)).unwrap();
-        let lateral: Vec<f64> = (0..cfg.columns)
-            .map(|j| r.envelope(j, row) as f64)
-            .collect();
-        let axial: Vec<f64> = (0..cfg.rows).map(|i| r.envelope(col, i) as f64).collect();
-        let fx = fwhm(&lateral) * cfg.pixel_width();
-        let fz = fwhm(&axial) * cfg.pixel_depth();
-        assert!((fx / lat - 1.0).abs() < 0.1, "lateral FWHM {fx} vs {lat}");
-        assert!((fz / ax - 1.0).abs() < 0.1, "axial FWHM {fz} vs {ax}");
-    }
 }
 
 #[test]
@@ -146,5 +114,61 @@ fn a_point_moves_with_the_column_compression() {
     assert!(
         (got - expected).abs() <= cfg.pixel_depth(),
         "{got} vs {expected}"
+    );
+}
+
+#[test]
+fn speckle_cell_area_matches_the_psf_prediction() {
+    let cfg = ImagingConfig::default();
+    let mut r = Renderer::phantom(
+        &cfg,
+        &Phantom::Uniform {
+            density: cfg.scatterer_density,
+            seed: 21,
+        },
+    )
+    .unwrap();
+    let d = SectionDeformation::rest(1.0);
+    r.render(&rest_input(&d)).unwrap();
+    // Intensity autocovariance over the focal band, normalized at zero lag,
+    // summed over lags out to ±12 columns (0.94 mm, > 2 lateral FWHM) and
+    // ±8 rows (0.63 mm, > 2.5 axial FWHM): the correlation area.
+    let rows = band(&cfg);
+    let (cols, lx, lz) = (20..cfg.columns - 20, 12i64, 8i64);
+    let intensity = |j: usize, i: usize| (r.envelope(j, i) as f64).powi(2);
+    let n = (cols.len() * rows.len()) as f64;
+    let mean = cols
+        .clone()
+        .flat_map(|j| rows.clone().map(move |i| (j, i)))
+        .map(|(j, i)| intensity(j, i))
+        .sum::<f64>()
+        / n;
+    let cov = |dx: i64, dz: i64| {
+        let mut s = 0.0;
+        let mut m = 0.0;
+        for j in cols.clone() {
+            for i in rows.clone() {
+                let (j2, i2) = (j as i64 + dx, i as i64 + dz);
+                s += (intensity(j, i) - mean) * (intensity(j2 as usize, i2 as usize) - mean);
+                m += 1.0;
+            }
+        }
+        s / m
+    };
+    let c0 = cov(0, 0);
+    let mut area = 0.0;
+    for dx in -lx..=lx {
+        for dz in -lz..=lz {
+            area += cov(dx, dz) / c0;
+        }
+    }
+    let measured = area * cfg.pixel_width() * cfg.pixel_depth();
+    let focus_row = (cfg.beam.transmit_focus / cfg.pixel_depth()) as usize;
+    let predicted = r.predicted_speckle_cell(focus_row);
+    // Issue 21: within 1.5× of the PSF's prediction.
+    let ratio = measured / predicted;
+    assert!(
+        (1.0 / 1.5..=1.5).contains(&ratio),
+        "speckle cell {measured} m² vs predicted {predicted} m²"
     );
 }

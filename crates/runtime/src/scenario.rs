@@ -224,6 +224,13 @@ impl Scenario {
         c
     }
 
+    /// The live viewer's imaging configuration: [`Scenario::imaging_config`]
+    /// at `[imaging] live_columns × live_rows` (256 × 384 by default; the
+    /// live path renders on one core and streams each frame as a PNG).
+    pub fn live_imaging_config(&self) -> ImagingConfig {
+        self.imaging_config().live()
+    }
+
     /// The `[link]` faults of each direction (haptic → physics, physics →
     /// haptic), each seeded from `run.seed`, so that a run is reproducible.
     pub fn link_faults(&self) -> (FaultConfig, FaultConfig) {

@@ -6,10 +6,17 @@
 //! the thigh until the quasi-static contact force reaches the requested
 //! force, and the skin displacement under it is carried into the image
 //! (`runtime::section`), so the image and the force agree.
+//!
+//! `--phantom points|speckle|cyst` renders a standard test phantom through
+//! the same pipeline instead (points on the axis at 10, 20, 30 and 40 mm;
+//! fully developed speckle; an 8 mm anechoic cyst at 20 mm in speckle).
 
 use super::image_site;
 use anyhow::{Context, Result};
-use echothigh_imaging::{write_gray_png, Anatomy, FrameInput, ImagingConfig, Renderer, VeinState};
+use echothigh_imaging::{
+    axis_column, write_gray_png, Anatomy, FrameInput, ImagingConfig, Phantom, Renderer,
+    SectionDeformation, VeinState, POINT_DEPTHS,
+};
 use echothigh_runtime::physics_side::PhysicsSide;
 use echothigh_runtime::scenario::Scenario;
 use echothigh_runtime::section::{press_to_force, StaticPress};
@@ -65,6 +72,48 @@ pub struct Args {
     /// fv-distal, popliteal (a level and a probe angle).
     #[arg(long)]
     pub site: Option<String>,
+    /// Render a test phantom instead of the thigh: points, speckle or cyst.
+    #[arg(long, value_enum)]
+    pub phantom: Option<PhantomKind>,
+}
+
+/// The standard test phantoms of `--phantom`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PhantomKind {
+    /// Point scatterers on the axis at 10, 20, 30 and 40 mm.
+    Points,
+    /// Fully developed speckle (a uniform medium).
+    Speckle,
+    /// An 8 mm anechoic cyst at 20 mm in speckle.
+    Cyst,
+}
+
+/// Renders the phantom `kind` of `cfg` (at rest, no anatomy).
+fn render_phantom(cfg: &ImagingConfig, kind: PhantomKind) -> Result<Vec<u8>> {
+    let (density, seed) = (cfg.scatterer_density, cfg.seed);
+    let phantom = match kind {
+        PhantomKind::Points => Phantom::Points(
+            POINT_DEPTHS
+                .iter()
+                .map(|&d| (axis_column(cfg), d))
+                .collect(),
+        ),
+        PhantomKind::Speckle => Phantom::Uniform { density, seed },
+        PhantomKind::Cyst => Phantom::Cyst {
+            density,
+            seed,
+            depth: 0.020,
+            radius: 0.004,
+        },
+    };
+    let mut r = Renderer::phantom(cfg, &phantom)?;
+    let rest = SectionDeformation::rest(1.0);
+    Ok(r.render(&FrameInput {
+        deformation: &rest,
+        probe_pressure: 0.0,
+        time: 0.0,
+        lateral_offset: 0.0,
+    })?)
 }
 
 fn parse_vein(s: &str) -> Result<VeinState, String> {
@@ -151,6 +200,13 @@ pub fn run(args: Args) -> Result<()> {
         "--lateral must be a finite distance in m, got {}",
         args.lateral
     );
+    if let Some(kind) = args.phantom {
+        anyhow::ensure!(!args.sweep, "--phantom renders one frame: drop --sweep");
+        let frame = render_phantom(&cfg, kind)?;
+        write(&args.out, &cfg, &frame)?;
+        println!("{}: {kind:?} phantom", args.out.display());
+        return Ok(());
+    }
     let bone = Anatomy::new(&cfg.anatomy, VeinState::Healthy)?.femur_top();
     if !args.sweep {
         let press = presses(&scenario, &[args.force], bone)?.remove(0);

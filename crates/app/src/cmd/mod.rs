@@ -8,4 +8,5 @@ pub mod devices;
 pub mod image;
 pub mod image_site;
 pub mod net;
+pub mod psf;
 pub mod run;

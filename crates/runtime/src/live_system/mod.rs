@@ -172,7 +172,7 @@ impl LiveSystem {
                 .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
                 .collect(),
         };
-        let img = scenario.imaging_config();
+        let img = scenario.live_imaging_config();
         let shared = Arc::new(Shared {
             snapshot: Mutex::new(LiveSnapshot {
                 positions: live_mesh.rest.clone(),

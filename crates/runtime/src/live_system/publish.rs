@@ -132,7 +132,7 @@ pub(super) struct ImagingThread {
 impl ImagingThread {
     /// Starts rendering `scenario`'s section from `shared`'s image input.
     pub(super) fn spawn(shared: Arc<Shared>, scenario: &Scenario) -> Result<Self> {
-        let cfg = scenario.imaging_config();
+        let cfg = scenario.live_imaging_config();
         let stop = Arc::new(AtomicBool::new(false));
         let st = stop.clone();
         let handle = std::thread::Builder::new()
