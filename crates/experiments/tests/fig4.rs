@@ -73,10 +73,7 @@ fn default_scenario_is_plausible_and_documented() {
     ));
     // Mid-thigh: the exam stays well inside the segment z ∈ [−0.15, 0.15] m,
     // away from its held end rings.
-    // The points in the model's frame (the scenario writes them in its
-    // site's frame).
-    let exam = s.exam_script_config().unwrap();
-    assert!(exam.skin_point[2].abs() < 0.05 && exam.start[2].abs() < 0.05);
+    assert!(s.exam.skin_point[2].abs() < 0.05 && s.exam.start[2].abs() < 0.05);
     for source in ["Massie", "Mussa-Ivaldi", "Tsuji", "Colgate"] {
         assert!(
             FIG4_TOML.contains(source),

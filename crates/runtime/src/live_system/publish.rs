@@ -270,7 +270,7 @@ mod tests {
         // An image of no rows: the scenario loader refuses it, so it is set
         // here behind the loader's back to make the renderer fail.
         let mut scenario = Scenario::default();
-        scenario.imaging.rows = 0;
+        scenario.imaging.live_rows = 0;
         let thread = ImagingThread::spawn(shared.clone(), &scenario).unwrap();
         let err = thread.stop().unwrap_err();
         assert!(format!("{err:#}").contains("imaging"), "{err:#}");

@@ -135,6 +135,7 @@ export class ThighScene {
 
   /** Places the probe, markers and force arrows from a `state` message. */
   updateState(s) {
+    this.onLeg = s.level != null;
     const v = (a) => new THREE.Vector3(a[0], a[1], a[2]);
     const [w, x, y, z] = s.probe_orientation;
     const valid = Math.abs(w * w + x * x + y * y + z * z - 1) < 0.1;
@@ -167,10 +168,14 @@ export class ThighScene {
     this.raycaster.setFromCamera(ndc, this.camera);
     const hit = this.raycaster.intersectObject(this.restMesh, false)[0];
     if (!hit) return null;
-    // theta (LiveCommand::Probe): the ellipse's parametric angle about the
-    // thigh axis, 0 at the anterior (+y) line, increasing towards +x. With the
-    // model's skin x = a cos θ_m, y = b sin θ_m, this is theta = π/2 − θ_m.
-    const theta = Math.atan2(hit.point.x / this.semiX, hit.point.y / this.semiY);
+    // theta (LiveCommand::Probe), 0 at the anterior (+y) line, increasing
+    // towards +x (lateral). On a patient's leg (the state names a level) it
+    // is the polar angle about the leg's axis (the runtime's θ_leg = −theta);
+    // on the elliptic cylinder, the ellipse's parametric angle: with the
+    // model's skin x = a cos θ_m, y = b sin θ_m, theta = π/2 − θ_m.
+    const theta = this.onLeg
+      ? Math.atan2(hit.point.x, hit.point.y)
+      : Math.atan2(hit.point.x / this.semiX, hit.point.y / this.semiY);
     return { theta, z: hit.point.z };
   }
 
