@@ -15,46 +15,121 @@
 
 use crate::anatomy_config::{AnatomyConfig, VeinState, VeinStateParams};
 use crate::error::ImagingError;
+use crate::structure_config::StructureKind;
 use crate::tissue::Tissue;
 use std::f64::consts::PI;
 
 /// Largest number of breakpoints [`Anatomy::column_breakpoints`] returns.
-pub const MAX_BREAKPOINTS: usize = 16;
+pub const MAX_BREAKPOINTS: usize = 64;
 
 /// Time to the systolic peak as a fraction of the heart cycle.
 const PULSE_PEAK: f64 = 0.12;
 
-/// A circular vessel at rest, in tissue coordinates.
+/// A vessel at rest, in tissue coordinates: an elliptic lumen (the cut of
+/// an oblique plane through a round vessel; a circle when the plane is
+/// normal to it) with a wall of uniform thickness.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Vessel {
     /// Lateral position of the centre (m).
     pub lateral: f64,
     /// Depth of the centre below the undeformed skin (m).
     pub depth: f64,
-    /// Lumen radius at rest (m).
+    /// Lumen semi-axis `a` at rest (m), at `angle` from the lateral axis.
     pub radius: f64,
+    /// Lumen semi-axis `b` at rest (m), across `a`.
+    pub radius_b: f64,
+    /// Angle of the `a` axis from the lateral axis towards depth (rad).
+    pub angle: f64,
     /// Wall thickness (m).
     pub wall: f64,
 }
 
 impl Vessel {
+    /// A circular vessel of lumen radius `radius` (m).
+    pub fn circle(lateral: f64, depth: f64, radius: f64, wall: f64) -> Self {
+        Vessel {
+            lateral,
+            depth,
+            radius,
+            radius_b: radius,
+            angle: 0.0,
+            wall,
+        }
+    }
+
+    /// The vertical chord of the ellipse grown by `grow` (m) in the column
+    /// `u`: `(centre depth, half-height)` (m), half-height 0 outside.
+    /// With `(ξ, ζ)` the ellipse axes, `ξ²/a² + ζ²/b² ≤ 1` is, along the
+    /// column (`Δu` fixed, `Δd` free), `A Δd² + 2 B Δd + C ≤ 0`: the chord
+    /// is centred at `−B/A` with half-height `√(B² − A C)/A`.
+    pub fn chord(&self, u: f64, grow: f64) -> (f64, f64) {
+        let a = (self.radius + grow).max(1e-9);
+        let b = (self.radius_b + grow).max(1e-9);
+        let (sn, cs) = self.angle.sin_cos();
+        let (ia, ib) = (1.0 / (a * a), 1.0 / (b * b));
+        let du = u - self.lateral;
+        let qa = sn * sn * ia + cs * cs * ib;
+        let qb = du * sn * cs * (ia - ib);
+        let qc = du * du * (cs * cs * ia + sn * sn * ib) - 1.0;
+        let disc = qb * qb - qa * qc;
+        if disc <= 0.0 {
+            return (self.depth, 0.0);
+        }
+        (self.depth - qb / qa, disc.sqrt() / qa)
+    }
+
     /// Half-height of the rest lumen in the column `u` (m; 0 outside).
     pub fn lumen_half_height(&self, u: f64) -> f64 {
-        let du = u - self.lateral;
-        (self.radius * self.radius - du * du).max(0.0).sqrt()
+        self.chord(u, 0.0).1
     }
 
     /// Half-height of the rest vessel with its wall in the column `u` (m; 0 outside).
     pub fn outer_half_height(&self, u: f64) -> f64 {
-        let r = self.radius + self.wall;
-        let du = u - self.lateral;
-        (r * r - du * du).max(0.0).sqrt()
+        self.chord(u, self.wall).1
     }
 
-    /// Rest lumen area (m²): `π r²`.
-    pub fn rest_area(&self) -> f64 {
-        PI * self.radius * self.radius
+    /// Whether `(u, d)` lies inside the lumen grown by `grow` (m).
+    pub fn contains(&self, u: f64, d: f64, grow: f64) -> bool {
+        let (c, h) = self.chord(u, grow);
+        (d - c).abs() < h
     }
+
+    /// Half of the lumen's lateral extent (m).
+    pub fn half_width(&self) -> f64 {
+        let (sn, cs) = self.angle.sin_cos();
+        (self.radius.powi(2) * cs * cs + self.radius_b.powi(2) * sn * sn).sqrt()
+    }
+
+    /// Half of the lumen's vertical extent (m).
+    pub fn half_height(&self) -> f64 {
+        let (sn, cs) = self.angle.sin_cos();
+        (self.radius.powi(2) * sn * sn + self.radius_b.powi(2) * cs * cs).sqrt()
+    }
+
+    /// Rest lumen area (m²): `π a b`.
+    pub fn rest_area(&self) -> f64 {
+        PI * self.radius * self.radius_b
+    }
+}
+
+/// How a vessel's lumen responds to the tissue pressure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LumenLaw {
+    /// The vein law with these parameters.
+    Vein(VeinStateParams),
+    /// The artery law of the anatomy's configuration.
+    Artery,
+}
+
+/// One vessel of the section with its lumen law and echoes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SectionVessel {
+    /// The vessel at rest.
+    pub vessel: Vessel,
+    /// Its lumen law.
+    pub law: LumenLaw,
+    /// Its tissue classes: (lumen, wall).
+    pub tissues: (Tissue, Tissue),
 }
 
 /// The section's anatomy for one vein state.
@@ -63,8 +138,10 @@ pub struct Anatomy {
     cfg: AnatomyConfig,
     state: VeinState,
     vein_params: VeinStateParams,
-    vein: Vessel,
-    artery: Vessel,
+    /// The studied vein (0), its artery (1), then the extra vessels.
+    vessels: Vec<SectionVessel>,
+    /// Muscle outlines and lymph nodes.
+    others: Vec<(StructureKind, Vessel)>,
 }
 
 /// Smooth step `3t² − 2t³` of `t` clamped to [0, 1].
@@ -73,30 +150,72 @@ fn smoothstep(t: f64) -> f64 {
     t * t * (3.0 - 2.0 * t)
 }
 
+/// The vein lumen law `c(p)` of the module docs with parameters `v`.
+fn vein_law(v: &VeinStateParams, pressure: f64) -> f64 {
+    let t = (pressure - v.collapse_onset) / (v.collapse_full - v.collapse_onset);
+    1.0 - (1.0 - v.min_lumen_ratio) * smoothstep(t)
+}
+
 impl Anatomy {
     /// The anatomy of `cfg` with the vein in `state`; validates `cfg` with
     /// the prefix `imaging.anatomy`.
     pub fn new(cfg: &AnatomyConfig, state: VeinState) -> Result<Self, ImagingError> {
         cfg.validate("imaging.anatomy")?;
         let vp = *cfg.vein(state);
-        let vein = Vessel {
-            lateral: cfg.vein_lateral,
-            depth: cfg.vein_depth,
-            radius: 0.5 * cfg.vein_diameter * vp.diameter_factor,
-            wall: vp.wall_thickness,
-        };
-        let artery = Vessel {
-            lateral: cfg.artery_lateral,
-            depth: cfg.artery_depth,
-            radius: 0.5 * cfg.artery_diameter,
-            wall: cfg.artery_wall_thickness,
-        };
+        let vein = Vessel::circle(
+            cfg.vein_lateral,
+            cfg.vein_depth,
+            0.5 * cfg.vein_diameter * vp.diameter_factor,
+            vp.wall_thickness,
+        );
+        let artery = Vessel::circle(
+            cfg.artery_lateral,
+            cfg.artery_depth,
+            0.5 * cfg.artery_diameter,
+            cfg.artery_wall_thickness,
+        );
+        let mut vessels = vec![
+            SectionVessel {
+                vessel: vein,
+                law: LumenLaw::Vein(vp),
+                tissues: (Tissue::VeinLumen, Tissue::VeinWall),
+            },
+            SectionVessel {
+                vessel: artery,
+                law: LumenLaw::Artery,
+                tissues: (Tissue::ArteryLumen, Tissue::ArteryWall),
+            },
+        ];
+        let mut others = Vec::new();
+        for st in &cfg.structures {
+            let v = Vessel {
+                lateral: st.lateral,
+                depth: st.depth,
+                radius: st.radii[0],
+                radius_b: st.radii[1],
+                angle: st.angle,
+                wall: st.wall,
+            };
+            match st.kind {
+                StructureKind::Vein => vessels.push(SectionVessel {
+                    vessel: v,
+                    law: LumenLaw::Vein(cfg.healthy),
+                    tissues: (Tissue::Blood, Tissue::VesselWall),
+                }),
+                StructureKind::Artery => vessels.push(SectionVessel {
+                    vessel: v,
+                    law: LumenLaw::Artery,
+                    tissues: (Tissue::ArteryLumen, Tissue::ArteryWall),
+                }),
+                k => others.push((k, v)),
+            }
+        }
         Ok(Anatomy {
             cfg: cfg.clone(),
             state,
             vein_params: vp,
-            vein,
-            artery,
+            vessels,
+            others,
         })
     }
 
@@ -110,14 +229,29 @@ impl Anatomy {
         self.state
     }
 
-    /// The femoral vein at rest (its size depends on the state).
+    /// The studied vein at rest (its size depends on the state).
     pub fn vein(&self) -> &Vessel {
-        &self.vein
+        &self.vessels[0].vessel
     }
 
-    /// The femoral artery at rest (diastole).
+    /// The studied vein's artery at rest (diastole).
     pub fn artery(&self) -> &Vessel {
-        &self.artery
+        &self.vessels[1].vessel
+    }
+
+    /// Every vessel of the section: the studied vein (0), its artery (1),
+    /// then the `structures` vessels in their configured order.
+    pub fn vessels(&self) -> &[SectionVessel] {
+        &self.vessels
+    }
+
+    /// Lumen area relative to rest of vessel `i` of [`Anatomy::vessels`]
+    /// under the tissue pressure `pressure` (Pa) at it and at time `time` (s).
+    pub fn lumen_ratio(&self, i: usize, pressure: f64, time: f64) -> f64 {
+        match self.vessels[i].law {
+            LumenLaw::Vein(p) => vein_law(&p, pressure),
+            LumenLaw::Artery => self.artery_lumen_ratio(pressure, time),
+        }
     }
 
     /// Depth of the femur's top below the undeformed skin (m), the default
@@ -150,6 +284,46 @@ impl Anatomy {
         if depth < c.skin_thickness {
             return Tissue::Skin;
         }
+        // Lumens first, then walls: where two vessels join (the GSV into
+        // the CFV at the SFJ) one's wall inside the other's lumen is lumen.
+        if let Some(sv) = self
+            .vessels
+            .iter()
+            .find(|x| x.vessel.contains(u, depth, 0.0))
+        {
+            return sv.tissues.0;
+        }
+        if let Some(sv) = self
+            .vessels
+            .iter()
+            .find(|x| x.vessel.contains(u, depth, x.vessel.wall))
+        {
+            return sv.tissues.1;
+        }
+        let half_line = 0.5 * c.fascia_thickness;
+        for (kind, v) in &self.others {
+            match kind {
+                StructureKind::LymphNode if v.contains(u, depth, 0.0) => {
+                    // The fatty hilum: the inner 45 % of the node's size.
+                    let hilum = Vessel {
+                        radius: 0.45 * v.radius,
+                        radius_b: 0.45 * v.radius_b,
+                        ..*v
+                    };
+                    return if hilum.contains(u, depth, 0.0) {
+                        Tissue::NodeHilum
+                    } else {
+                        Tissue::NodeCortex
+                    };
+                }
+                StructureKind::Muscle
+                    if v.contains(u, depth, half_line) && !v.contains(u, depth, -half_line) =>
+                {
+                    return Tissue::Fascia;
+                }
+                _ => {}
+            }
+        }
         let muscle_top = c.skin_thickness + c.fat_thickness;
         if depth < muscle_top {
             return Tissue::Fat;
@@ -162,18 +336,6 @@ impl Anatomy {
             } else {
                 Tissue::Marrow
             };
-        }
-        for (v, lumen, wall) in [
-            (&self.vein, Tissue::VeinLumen, Tissue::VeinWall),
-            (&self.artery, Tissue::ArteryLumen, Tissue::ArteryWall),
-        ] {
-            let r = ((u - v.lateral).powi(2) + (depth - v.depth).powi(2)).sqrt();
-            if r < v.radius {
-                return lumen;
-            }
-            if r < v.radius + v.wall {
-                return wall;
-            }
         }
         if depth < muscle_top + c.fascia_thickness
             || (depth - self.intermuscular_fascia(u)).abs() < 0.5 * c.fascia_thickness
@@ -217,15 +379,19 @@ impl Anatomy {
         push(0.0, &mut n);
         push(c.skin_thickness, &mut n);
         push(c.skin_thickness + c.fat_thickness, &mut n);
-        for v in [&self.vein, &self.artery] {
-            let ho = v.outer_half_height(u);
+        for v in self.vessels.iter().map(|x| &x.vessel).chain(
+            self.others
+                .iter()
+                .filter_map(|(k, v)| (*k == StructureKind::LymphNode).then_some(v)),
+        ) {
+            let (co, ho) = v.chord(u, v.wall);
             if ho > 0.0 {
-                push(v.depth - ho, &mut n);
-                push(v.depth + ho, &mut n);
-                let hl = v.lumen_half_height(u);
+                push(co - ho, &mut n);
+                push(co + ho, &mut n);
+                let (cl, hl) = v.chord(u, 0.0);
                 if hl > 0.0 {
-                    push(v.depth - hl, &mut n);
-                    push(v.depth + hl, &mut n);
+                    push(cl - hl, &mut n);
+                    push(cl + hl, &mut n);
                 }
             }
         }
@@ -252,9 +418,7 @@ impl Anatomy {
     /// Vein lumen area relative to rest (the vertical flattening `c`) under
     /// the tissue pressure `pressure` (Pa) at the vein.
     pub fn vein_lumen_ratio(&self, pressure: f64) -> f64 {
-        let v = &self.vein_params;
-        let t = (pressure - v.collapse_onset) / (v.collapse_full - v.collapse_onset);
-        1.0 - (1.0 - v.min_lumen_ratio) * smoothstep(t)
+        vein_law(&self.vein_params, pressure)
     }
 
     /// Artery lumen area relative to its diastolic rest, under the tissue
@@ -269,12 +433,12 @@ impl Anatomy {
 
     /// Vein lumen area (m²) under the tissue pressure `pressure` (Pa) at the vein.
     pub fn vein_lumen_area(&self, pressure: f64) -> f64 {
-        self.vein.rest_area() * self.vein_lumen_ratio(pressure)
+        self.vein().rest_area() * self.vein_lumen_ratio(pressure)
     }
 
     /// Artery lumen area (m²) under the tissue pressure `pressure` (Pa) at time `time` (s).
     pub fn artery_lumen_area(&self, pressure: f64, time: f64) -> f64 {
-        self.artery.rest_area() * self.artery_lumen_ratio(pressure, time)
+        self.artery().rest_area() * self.artery_lumen_ratio(pressure, time)
     }
 }
 

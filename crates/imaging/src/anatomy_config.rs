@@ -37,6 +37,7 @@
 //!   128).
 
 use crate::error::ImagingError;
+use crate::structure_config::{StructureConfig, MAX_STRUCTURES};
 use serde::{Deserialize, Serialize};
 
 /// One millimetre of mercury in pascals.
@@ -303,6 +304,11 @@ pub struct AnatomyConfig {
     pub acute: VeinStateParams,
     /// Vein with a chronic thrombus (`[imaging.anatomy.chronic]`).
     pub chronic: VeinStateParams,
+    /// The section's other structures (`[[imaging.anatomy.structures]]`):
+    /// vessels, muscle outlines, lymph nodes, as the plane through the 3D
+    /// leg cuts them (`echothigh image --at/--site` fills them). Default
+    /// none (the mid-thigh pair alone). At most 12.
+    pub structures: Vec<StructureConfig>,
 }
 
 impl Default for AnatomyConfig {
@@ -331,6 +337,7 @@ impl Default for AnatomyConfig {
             healthy: VeinStateParams::healthy(),
             acute: VeinStateParams::acute(),
             chronic: VeinStateParams::chronic(),
+            structures: Vec::new(),
         }
     }
 }
@@ -353,6 +360,17 @@ impl AnatomyConfig {
     /// Checks every field, naming the offending key as `"{prefix}.{field}"`.
     pub fn validate(&self, prefix: &str) -> Result<(), ImagingError> {
         let p = prefix;
+        if self.structures.len() > MAX_STRUCTURES {
+            return Err(ImagingError::invalid(
+                p,
+                "structures",
+                self.structures.len(),
+                "at most 12 structures",
+            ));
+        }
+        for (i, st) in self.structures.iter().enumerate() {
+            st.validate(&format!("{p}.structures[{i}]"))?;
+        }
         ImagingError::in_range(
             p,
             "skin_thickness",

@@ -21,7 +21,7 @@ use crate::scatterers::ScattererField;
 use crate::stages::{
     compress_column, convolve_column, splat_column, Additive, FrameGeometry, LogCompression,
 };
-use crate::warp::{compensated_ratio, VesselWarp};
+use crate::warp::{compensated_ratio, VesselWarp, WarpSet, MAX_VESSELS};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -129,7 +129,7 @@ pub struct Renderer {
     /// The current frame's pan, in columns (see [`Renderer::pan`]).
     pan_columns: isize,
     surface: Vec<f64>,
-    warps: Vec<[VesselWarp; 2]>,
+    warps: Vec<WarpSet>,
     rf: Vec<[f32; 2]>,
     iq: Vec<[f32; 2]>,
     gray: Vec<u8>,
@@ -243,7 +243,7 @@ impl Renderer {
             bin_u,
             pan_columns: 0,
             surface: vec![0.0; bins],
-            warps: vec![[VesselWarp::default(); 2]; bins],
+            warps: vec![WarpSet::default(); bins],
             rf: vec![[0.0; 2]; bins * padded_rows],
             iq: vec![[0.0; 2]; cfg.columns * cfg.rows],
             gray: vec![0; cfg.columns * cfg.rows],
@@ -319,8 +319,9 @@ impl Renderer {
         );
         let ratio = ratio_of(p);
         let warp = VesselWarp::new(v, v.lateral, compensated_ratio(ratio, s, def.bone_depth));
-        let top = column_depth(s, def.bone_depth, warp.apply(v.depth - v.radius)) - face;
-        let bottom = column_depth(s, def.bone_depth, v.depth + v.radius) - face;
+        let (c, h) = v.chord(v.lateral, 0.0);
+        let top = column_depth(s, def.bone_depth, warp.apply(c - h)) - face;
+        let bottom = column_depth(s, def.bone_depth, c + h) - face;
         Lumen {
             area: ratio * v.rest_area(),
             rest_area: v.rest_area(),
@@ -328,7 +329,7 @@ impl Renderer {
             lateral,
             depth: 0.5 * (top + bottom),
             half_height: 0.5 * (bottom - top),
-            half_width: v.radius,
+            half_width: v.half_width(),
         }
     }
 
@@ -350,6 +351,27 @@ impl Renderer {
         }))
     }
 
+    /// The lumen of vessel `i` of [`Anatomy::vessels`] for `input` (`None`
+    /// for a phantom or past the last vessel), by that vessel's own lumen
+    /// law at the tissue pressure at its centre.
+    pub fn vessel_lumen(
+        &self,
+        i: usize,
+        input: &FrameInput,
+    ) -> Result<Option<Lumen>, ImagingError> {
+        check_input(input)?;
+        let Some(a) = &self.anatomy else {
+            return Ok(None);
+        };
+        let Some(sv) = a.vessels().get(i) else {
+            return Ok(None);
+        };
+        let face = input.deformation.face_depth(0.5 * self.cfg.width);
+        Ok(Some(self.lumen_of(&sv.vessel, input, face, |p| {
+            a.lumen_ratio(i, p, input.time)
+        })))
+    }
+
     /// Stage 1: frame geometry, per-column skin displacement and warps.
     fn prepare(&mut self, input: &FrameInput) -> Result<(), ImagingError> {
         let def = input.deformation;
@@ -361,23 +383,38 @@ impl Renderer {
         // Electronic noise changes from frame to frame (deterministically in time).
         let tick = (input.time * 1e3).round().rem_euclid(1e6) as usize;
         self.noise_roll = tick.wrapping_mul(2_654_435_761) % NOISE_ROLL;
-        let ratios = self.lumens(input)?.map(|r| {
-            (
-                r.vein.area / r.vein.rest_area,
-                r.artery.area / r.artery.rest_area,
-            )
-        });
+        check_input(input)?;
+        let mut ratios = [1.0f64; MAX_VESSELS];
+        let n = match &self.anatomy {
+            Some(a) => {
+                let vs = a.vessels();
+                for (i, r) in ratios.iter_mut().enumerate().take(vs.len()) {
+                    *r = self
+                        .lumen_of(&vs[i].vessel, input, face, |p| {
+                            a.lumen_ratio(i, p, input.time)
+                        })
+                        .area
+                        / vs[i].vessel.rest_area();
+                }
+                vs.len().min(MAX_VESSELS)
+            }
+            None => 0,
+        };
         for (b, &u_image) in self.bin_u.iter().enumerate() {
             let s = def.surface_at(u_image);
             self.surface[b] = s;
             let u = u_image + pan_m;
-            self.warps[b] = match (ratios, &self.anatomy) {
-                (Some((rv, ra)), Some(a)) => [
-                    VesselWarp::new(a.vein(), u, compensated_ratio(rv, s, def.bone_depth)),
-                    VesselWarp::new(a.artery(), u, compensated_ratio(ra, s, def.bone_depth)),
-                ],
-                _ => [VesselWarp::default(); 2],
-            };
+            let set = &mut self.warps[b];
+            set.clear();
+            if let Some(a) = &self.anatomy {
+                for (sv, &r) in a.vessels().iter().zip(&ratios[..n]) {
+                    set.push(VesselWarp::new(
+                        &sv.vessel,
+                        u,
+                        compensated_ratio(r, s, def.bone_depth),
+                    ));
+                }
+            }
         }
         Ok(())
     }

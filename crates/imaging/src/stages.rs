@@ -6,7 +6,7 @@ use crate::anatomy::{Anatomy, MAX_BREAKPOINTS};
 use crate::deformation::column_depth;
 use crate::psf::{safe_log2, PsfTables, BLOCK_ROWS, PHASE_STEPS};
 use crate::pulse::AXIAL_SUBSTEPS;
-use crate::warp::VesselWarp;
+use crate::warp::WarpSet;
 
 /// Frame-wide quantities the column stages read.
 #[derive(Debug, Clone, Copy)]
@@ -26,13 +26,8 @@ pub(crate) struct FrameGeometry {
 /// Image depth below the face (m) of the tissue point at `depth` (m) in a
 /// column with skin displacement `surface` (m) and the vessels' `warps`.
 #[inline]
-pub(crate) fn image_depth(
-    g: &FrameGeometry,
-    surface: f64,
-    warps: &[VesselWarp; 2],
-    depth: f64,
-) -> f64 {
-    let d = warps[1].apply(warps[0].apply(depth));
+pub(crate) fn image_depth(g: &FrameGeometry, surface: f64, warps: &WarpSet, depth: f64) -> f64 {
+    let d = warps.apply(depth);
     column_depth(surface, g.bone, d) - g.face
 }
 
@@ -47,7 +42,7 @@ pub(crate) fn splat_column(
     depth: &[f32],
     amp: &[[f32; 2]],
     surface: f64,
-    warps: &[VesselWarp; 2],
+    warps: &WarpSet,
     out: &mut [[f32; 2]],
 ) {
     out.fill([0.0, 0.0]);
@@ -57,7 +52,7 @@ pub(crate) fn splat_column(
     let inv_dz = 1.0 / g.dz;
     let lowest = -(k as f64) - 1.0;
     let highest = (g.rows + k) as f64;
-    let any_warp = warps[0].is_active() || warps[1].is_active();
+    let any_warp = warps.is_active();
     let last = elev.len() as i64 - 1;
     for (&d, a) in depth.iter().zip(amp) {
         let d = d as f64;
@@ -170,7 +165,7 @@ pub(crate) fn compress_column(
     anatomy: Option<&Anatomy>,
     u: f64,
     surface: f64,
-    warps: &[VesselWarp; 2],
+    warps: &WarpSet,
     iq: &[[f32; 2]],
     add: &Additive,
     gray: &mut [u8],

@@ -30,6 +30,14 @@ pub enum Tissue {
     ArteryWall,
     /// Lumen of the femoral artery (blood).
     ArteryLumen,
+    /// Lumen of a patent vessel other than the studied vein (blood).
+    Blood,
+    /// Wall of a vein other than the studied one.
+    VesselWall,
+    /// Cortex of a lymph node (hypoechoic).
+    NodeCortex,
+    /// Fatty hilum of a lymph node (echogenic).
+    NodeHilum,
     /// Femoral cortex.
     Cortex,
     /// Femoral marrow cavity (behind the cortex: never reached by the beam).
@@ -59,6 +67,14 @@ impl Tissue {
             Tissue::VeinLumen => (Some(-50.0), 0.15),
             Tissue::ArteryWall => (Some(6.0), 0.8),
             Tissue::ArteryLumen => (Some(-50.0), 0.15),
+            Tissue::Blood => (Some(-50.0), 0.15),
+            Tissue::VesselWall => (Some(4.0), 0.8),
+            // A normal node: a hypoechoic cortex (about 15 dB under muscle)
+            // around an echogenic fatty hilum (brighter than muscle); e.g.
+            // Ying & Ahuja 2003, "Sonography of neck lymph nodes", Clin
+            // Radiol 58 — the same appearance as inguinal nodes.
+            Tissue::NodeCortex => (Some(-15.0), 0.6),
+            Tissue::NodeHilum => (Some(6.0), 0.6),
             // The bone–soft-tissue interface reflects ≈ 64 % of the incident
             // amplitude (Z ≈ 7.4 vs 1.6 MRayl, Duck 1990), far above tissue
             // backscatter; the cortex's attenuation confines its echo to

@@ -43,16 +43,16 @@ impl VesselWarp {
     /// tissue above follows over `1.5` radii (or `1.5 |k|` if the lumen expands and that is larger, which
     /// keeps the map increasing).
     pub fn new(vessel: &Vessel, u: f64, ratio: f64) -> Self {
-        let h = vessel.lumen_half_height(u);
-        let decay = (1.5 * vessel.radius).max(3.0 * (ratio - 1.0) * h);
+        let (centre, h) = vessel.chord(u, 0.0);
+        let decay = (1.5 * vessel.half_height()).max(3.0 * (ratio - 1.0) * h);
         VesselWarp {
-            centre: vessel.depth,
+            centre,
             half_height: h,
             ratio,
             shift: 2.0 * (1.0 - ratio) * h,
             decay,
-            lo: vessel.depth - h - decay,
-            hi: vessel.depth + h,
+            lo: centre - h - decay,
+            hi: centre + h,
         }
     }
 
@@ -79,17 +79,50 @@ impl VesselWarp {
     }
 }
 
+/// Most vessels in one section: the studied pair and the extra structures.
+pub const MAX_VESSELS: usize = 2 + crate::structure_config::MAX_STRUCTURES;
+
+/// The active warps of one column, applied in order (each map is
+/// increasing, so their composition is too).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct WarpSet {
+    n: usize,
+    w: [VesselWarp; MAX_VESSELS],
+}
+
+impl WarpSet {
+    /// Empties the set.
+    pub fn clear(&mut self) {
+        self.n = 0;
+    }
+
+    /// Adds `w` if it moves anything in this column.
+    pub fn push(&mut self, w: VesselWarp) {
+        if w.is_active() && self.n < MAX_VESSELS {
+            self.w[self.n] = w;
+            self.n += 1;
+        }
+    }
+
+    /// Whether the set moves anything.
+    #[inline]
+    pub fn is_active(&self) -> bool {
+        self.n > 0
+    }
+
+    /// The warped depth (m) of the tissue point at `depth` (m).
+    #[inline]
+    pub fn apply(&self, depth: f64) -> f64 {
+        self.w[..self.n].iter().fold(depth, |d, w| w.apply(d))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn vessel() -> Vessel {
-        Vessel {
-            lateral: 0.0,
-            depth: 0.03,
-            radius: 0.005,
-            wall: 0.0005,
-        }
+        Vessel::circle(0.0, 0.03, 0.005, 0.0005)
     }
 
     #[test]

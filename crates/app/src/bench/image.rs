@@ -1,6 +1,7 @@
 //! `echothigh bench image`: frame rate of the B-mode renderer at the
 //! default size (512 × 768, `echothigh image`) and at the live viewer's
-//! size (256 × 384, `[live] image_columns/image_rows`), on one core (the
+//! size (256 × 384, `[imaging] live_columns/live_rows`), the latter also
+//! with the section of the 3D leg at `fv-proximal`, on one core (the
 //! renderer is serial and allocation-free: the viewer renders on its own
 //! imaging thread), under a press that varies every frame. Frame times are
 //! the thread's CPU time (`cpu-time`), which the other processes sharing
@@ -87,12 +88,21 @@ fn run_frames(
 }
 
 /// Times one frame size; returns its JSON report.
-fn bench_size(columns: usize, rows: usize, frames: usize) -> Result<serde_json::Value> {
-    let cfg = ImagingConfig {
+fn bench_size(
+    columns: usize,
+    rows: usize,
+    frames: usize,
+    leg_site: Option<&str>,
+) -> Result<serde_json::Value> {
+    let mut cfg = ImagingConfig {
         columns,
         rows,
         ..Default::default()
     };
+    if let Some(site) = leg_site {
+        let p = crate::cmd::image_site::place("lean-male", None, None, Some(site))?;
+        cfg.anatomy = crate::cmd::image_site::section_anatomy(&cfg.anatomy, &p)?;
+    }
     let mut r = Renderer::new(&cfg, VeinState::Healthy)?;
     let bone = r.anatomy().context("anatomy")?.femur_top();
     // A press going from 2 to 14 mm and back over 60 frames.
@@ -109,8 +119,12 @@ fn bench_size(columns: usize, rows: usize, frames: usize) -> Result<serde_json::
         "rows": cfg.rows,
         "width_m": cfg.width,
         "depth_m": cfg.depth,
+        "anatomy": leg_site.map_or("mid-thigh pair (default)".to_string(), |s| {
+            format!("3D leg, lean-male, site {s}")
+        }),
+        "vessels": r.anatomy().map_or(0, |a| a.vessels().len()),
         "scatterers": r.scatterer_count(),
-                "one_core_thread_cpu": timing(cpu, 1),
+        "one_core_thread_cpu": timing(cpu, 1),
         "one_core_wall": timing(wall, 1),
     }))
 }
@@ -119,10 +133,17 @@ fn bench_size(columns: usize, rows: usize, frames: usize) -> Result<serde_json::
 pub fn run(args: Args) -> Result<()> {
     anyhow::ensure!(args.frames > 0, "--frames must be > 0");
     let d = ImagingConfig::default();
-    let sizes = [(d.columns, d.rows), (256, 384)];
+    // The default size, the live size, and the live size with the section
+    // of the 3D leg below the profunda's branch point (four vessels, the
+    // sartorius outline).
+    let sizes = [
+        (d.columns, d.rows, None),
+        (256, 384, None),
+        (256, 384, Some("fv-proximal")),
+    ];
     let reports = sizes
         .iter()
-        .map(|&(c, r)| bench_size(c, r, args.frames))
+        .map(|&(c, r, site)| bench_size(c, r, args.frames, site))
         .collect::<Result<Vec<_>>>()?;
     let report = serde_json::json!({
         "benchmark": "image",
@@ -136,9 +157,10 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         for r in &reports {
             println!(
-                "image {}x{}: one core {:.0} fps (median thread CPU), {:.0} fps (median wall)",
+                "image {}x{} ({}): one core {:.0} fps (median thread CPU), {:.0} fps (median wall)",
                 r["columns"],
                 r["rows"],
+                r["anatomy"],
                 r["one_core_thread_cpu"]["fps_median"]
                     .as_f64()
                     .unwrap_or(0.0),

@@ -2,20 +2,23 @@
 //! imaging anatomy taken from the section of the 3D leg (`echothigh-anatomy`)
 //! under a probe held normal to the skin there.
 //!
-//! The B-mode renderer draws one vein–artery pair over the femur, with the
-//! skin, fat, fascia and muscle layers; this module fills those from the
-//! section: the deep vein of the level (`cfv`, `fv` or `pv`) and its
-//! companion artery (`cfa`, `fa`, `pa`) with their position, depth and
-//! area-equivalent diameter (`2 √(a b)` of the cut ellipse, which keeps the
-//! lumen's area when the plane is oblique), the femur's position and
-//! radius, the skin's and the fascia's depth. The other structures of the
-//! section (GSV, profunda, sartorius, the lymph node) are listed by
-//! `echothigh anatomy` but not drawn yet.
+//! The B-mode renderer draws the studied vein–artery pair over the femur,
+//! with the skin, fat, fascia and muscle layers, and the section's other
+//! structures; this module fills those from the section: the deep vein of
+//! the level (`cfv`, `fv` or `pv`) and its companion artery (`cfa`, `fa`,
+//! `pa`) with their position, depth and area-equivalent diameter (`2 √(a b)`
+//! of the cut ellipse, which keeps the lumen's area when the plane is
+//! oblique), the femur's position and radius, the skin's and the fascia's
+//! depth; and every other structure the plane cuts (GSV, profunda vein and
+//! artery, a duplicated femoral vein, sartorius, a lymph node) as its cut
+//! ellipse in `imaging.anatomy.structures` (veins with the healthy lumen
+//! law, arteries with the artery law, the sartorius as a muscle outline).
 
 use crate::cmd::anatomy::load_patient;
 use anyhow::{bail, Context, Result};
+use echothigh_anatomy::Kind;
 use echothigh_anatomy::{Anatomy, ProbePose, Section, Site, StructureId};
-use echothigh_imaging::AnatomyConfig;
+use echothigh_imaging::{AnatomyConfig, StructureConfig, StructureKind};
 
 /// Where the probe is on the leg: a patient and a level (or a site).
 #[derive(Debug, Clone)]
@@ -105,6 +108,7 @@ pub fn section_anatomy(base: &AnatomyConfig, placement: &Placement) -> Result<An
     c.femur_radius = femur_r;
     c.muscle_thickness = fd - femur_r - section.fascia_depth;
     c.intermuscular_fascia_depth = intermuscular(&section, c.intermuscular_fascia_depth);
+    c.structures = extra_structures(&section, &[vein_id, artery_of(vein_id)], base);
     c.validate("imaging.anatomy").with_context(|| {
         format!(
             "the section at s = {:.1} mm, angle {:.1}° cannot be drawn",
@@ -123,3 +127,45 @@ fn intermuscular(section: &Section, fallback: f64) -> f64 {
         .map(|x| x.ellipse.depth + x.ellipse.radii[0].min(x.ellipse.radii[1]))
         .unwrap_or(fallback)
 }
+
+/// Every structure of `section` but `drawn` (the studied pair) and the
+/// bones, as the renderer's extra structures; structures beyond the
+/// renderer's reach (more than 200 mm aside or 250 mm deep) are left out.
+fn extra_structures(
+    section: &Section,
+    drawn: &[StructureId],
+    base: &AnatomyConfig,
+) -> Vec<StructureConfig> {
+    section
+        .structures
+        .iter()
+        .filter(|x| !drawn.contains(&x.id))
+        .filter_map(|x| {
+            let (kind, wall) = match x.kind {
+                Kind::DeepVein | Kind::SuperficialVein => {
+                    (StructureKind::Vein, base.healthy.wall_thickness)
+                }
+                Kind::Artery => (StructureKind::Artery, base.artery_wall_thickness),
+                Kind::Muscle => (StructureKind::Muscle, 0.0),
+                Kind::LymphNode => (StructureKind::LymphNode, 0.0),
+                Kind::Bone => return None,
+            };
+            let e = &x.ellipse;
+            let st = StructureConfig {
+                name: x.id.as_str().to_string(),
+                kind,
+                lateral: e.lateral,
+                depth: e.depth,
+                radii: e.radii,
+                angle: e.angle,
+                wall,
+            };
+            st.validate("imaging.anatomy.structure").ok().map(|_| st)
+        })
+        .take(echothigh_imaging::MAX_STRUCTURES)
+        .collect()
+}
+
+#[cfg(test)]
+#[path = "image_site_tests.rs"]
+mod tests;
