@@ -11,6 +11,7 @@
 
 use crate::block_sparse::BlockSparse;
 use crate::config::TissueParams;
+use crate::edge_matrix::EdgeMatrix;
 use crate::force_model::{ForceModel, JacobianScratch};
 use crate::mesh::{EdgeKind, SurfaceMesh};
 use crate::springs::{
@@ -308,6 +309,42 @@ impl ForceModel for TissueForces {
             let damp = damper_jacobian(&x[s.node], &s.anchor, s.c);
             let block = (stiff + s.tangential_k) * alpha + (damp + s.tangential_c) * beta;
             a.add_at(s.diag, &-block);
+        }
+    }
+
+    /// Streaming edge-form assembly: one `(d, p, q)` per spring, in mesh
+    /// order (`α S + β c d dᵀ`: `p = α (a − g) + β c`, `q = α g`), then one
+    /// diagonal block per normal spring.
+    fn add_scaled_jacobians_edge(
+        &mut self,
+        x: &[Vec3],
+        _v: &[Vec3],
+        alpha: f64,
+        beta: f64,
+        a: &mut EdgeMatrix,
+        _scratch: &mut JacobianScratch,
+    ) {
+        let geo = self.geometric_in_compression;
+        for s in &self.springs {
+            let delta = x[s.j] - x[s.i];
+            let l = delta.norm();
+            if l <= f64::MIN_POSITIVE {
+                continue;
+            }
+            let d = delta / l;
+            let f = linear_force(s.a, l - s.rest);
+            let g = if f < 0.0 && !geo { 0.0 } else { f / l };
+            let p = alpha * (s.a - g) + beta * s.c;
+            // (i, j) is a mesh edge, in the side matrix's pattern.
+            let written = a.add_spring(s.i, s.j, &d, p, alpha * g);
+            debug_assert!(written.is_ok());
+        }
+        for s in &self.normals {
+            let law = |e| (normal_force(s.a, s.b, e), normal_stiffness(s.a, s.b, e));
+            let (_, stiff) = spring_force_jacobian(&x[s.node], &s.anchor, s.rest, law, geo);
+            let damp = damper_jacobian(&x[s.node], &s.anchor, s.c);
+            let block = (stiff + s.tangential_k) * alpha + (damp + s.tangential_c) * beta;
+            a.add_diagonal(s.node, &-block);
         }
     }
 
