@@ -272,14 +272,29 @@ impl EdgeMatrix {
     /// its node pass). Allocates nothing.
     pub fn add_off_diagonal_product(&self, x: &[Vec3], y: &mut [Vec3]) -> f64 {
         let mut xax = 0.0;
+        // Edges come grouped by their first node (the mesh lists a node's
+        // springs together): row i's sum stays in a register while its
+        // group lasts, so consecutive edges do not wait on each other's
+        // store to y[i], and the group's share of xᵀAx is 2 x_iᵀ Σ E x_j.
+        let mut row = usize::MAX;
+        let (mut xi, mut acc) = (Vec3::zeros(), Vec3::zeros());
         for e in &self.edges {
             let (i, j) = (e.i as usize, e.j as usize);
-            let (xi, xj) = (x[i], x[j]);
-            let exj = e.apply(&xj);
-            let exi = e.apply(&xi);
-            y[i] += exj;
-            y[j] += exi;
-            xax += 2.0 * xi.dot(&exj);
+            if i != row {
+                if row != usize::MAX {
+                    y[row] += acc;
+                    xax += 2.0 * xi.dot(&acc);
+                }
+                row = i;
+                xi = x[i];
+                acc = Vec3::zeros();
+            }
+            acc += e.apply(&x[j]);
+            y[j] += e.apply(&xi);
+        }
+        if row != usize::MAX {
+            y[row] += acc;
+            xax += 2.0 * xi.dot(&acc);
         }
         for t in &self.rank_one {
             let k = Vec3::from(t.k);

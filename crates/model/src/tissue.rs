@@ -58,6 +58,9 @@ struct NormalSpring {
 pub struct TissueForces {
     springs: Vec<LinearSpring>,
     normals: Vec<NormalSpring>,
+    /// `(anchor, min_length)` of node `k`'s normal spring (m): the 32 bytes
+    /// the step limiter reads, apart from the 248-byte spring.
+    limits: Vec<(Vec3, f64)>,
     geometric_in_compression: bool,
 }
 
@@ -139,9 +142,11 @@ impl TissueForces {
                     diag: pattern.diagonal_index(k),
                 }
             })
-            .collect();
+            .collect::<Vec<NormalSpring>>();
+        debug_assert!(normals.iter().enumerate().all(|(k, s)| s.node == k));
         TissueForces {
             springs,
+            limits: normals.iter().map(|s| (s.anchor, s.min_length)).collect(),
             normals,
             geometric_in_compression,
         }
@@ -251,7 +256,18 @@ fn path_fraction(p: &Vec3, d: &Vec3, l_min: f64) -> f64 {
 
 impl ForceModel for TissueForces {
     fn add_forces(&mut self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
+        // The mesh lists a node's springs together: node i's force stays
+        // in a register while its group lasts (no store-to-load chain).
+        let mut row = usize::MAX;
+        let mut acc = Vec3::zeros();
         for s in &self.springs {
+            if s.i != row {
+                if row != usize::MAX {
+                    f[row] += acc;
+                }
+                row = s.i;
+                acc = Vec3::zeros();
+            }
             // f_i = (a e + c ė) d: spring and damper along the same direction.
             let delta = x[s.j] - x[s.i];
             let l = delta.norm();
@@ -260,8 +276,11 @@ impl ForceModel for TissueForces {
             }
             let rate = (v[s.j] - v[s.i]).dot(&delta) / l;
             let fi = delta * ((linear_force(s.a, l - s.rest) + s.c * rate) / l);
-            f[s.i] += fi;
+            acc += fi;
             f[s.j] -= fi;
+        }
+        if row != usize::MAX {
+            f[row] += acc;
         }
         let zero = Vec3::zeros();
         for s in &self.normals {
@@ -378,9 +397,10 @@ impl ForceModel for TissueForces {
     /// Keeps every normal spring longer than `rest − (1 − margin) b/a` along
     /// the straight path from `x` to `x + dx`.
     fn max_step_fraction(&self, x: &[Vec3], dx: &[Vec3]) -> f64 {
-        self.normals
+        self.limits
             .iter()
-            .map(|s| path_fraction(&(x[s.node] - s.anchor), &dx[s.node], s.min_length))
+            .zip(x.iter().zip(dx))
+            .map(|((anchor, min_length), (x, dx))| path_fraction(&(x - anchor), dx, *min_length))
             .fold(1.0, f64::min)
     }
 }
