@@ -42,7 +42,7 @@ use crate::grid::SurfaceGrid;
 use crate::params::ContactParams;
 use crate::probe::{OrientedBox, Probe};
 use crate::surface::Adjacency;
-use echothigh_model::{BlockSparse, ForceModel, JacobianScratch, ThighModel, Vec3};
+use echothigh_model::{BlockSparse, EdgeMatrix, ForceModel, JacobianScratch, ThighModel, Vec3};
 use nalgebra::{Isometry3, Matrix3, Translation3, Vector3};
 
 /// The surface under one face sample, found by [`PenaltyContact::prepare`].
@@ -476,6 +476,30 @@ impl ForceModel for PenaltyContact {
             if let Some(contact) = self.sample_contact(s, x, v) {
                 if !contact.clamped {
                     Self::add_sample_block(a, &self.tri_blocks[s.triangle], &s.beta, &kk, c);
+                }
+            }
+        }
+    }
+
+    /// Edge-form assembly: each penetrating sample is the rank-one term
+    /// `−(α λ_c + β μ_c) a_j (β ⊗ k̂)(β ⊗ k̂)ᵀ` on its triangle.
+    fn add_scaled_jacobians_edge(
+        &mut self,
+        x: &[Vec3],
+        v: &[Vec3],
+        alpha: f64,
+        beta: f64,
+        a: &mut EdgeMatrix,
+        _scratch: &mut JacobianScratch,
+    ) {
+        let k = self.direction();
+        let c = (alpha * self.params.stiffness + beta * self.params.damping) * self.sample_area;
+        for s in self.surface.iter().flatten() {
+            if let Some(contact) = self.sample_contact(s, x, v) {
+                if !contact.clamped {
+                    // Triangle edges are mesh edges: in the side pattern.
+                    let written = a.add_rank_one(s.nodes, s.beta, &k, -c);
+                    debug_assert!(written.is_ok());
                 }
             }
         }

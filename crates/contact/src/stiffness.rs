@@ -23,7 +23,9 @@
 //! series. `n = −k̂` is the outward normal; with `F` the force on the
 //! tissue, `k = −∂(F·n)/∂depth`.
 
-use echothigh_model::{BlockSparse, ForceModel, JacobianScratch, SolveStats, ThighModel, Vec3};
+use echothigh_model::{
+    BlockSparse, EdgeMatrix, ForceModel, JacobianScratch, SolveStats, ThighModel, Vec3,
+};
 use nalgebra::Matrix3;
 
 use crate::penalty::PenaltyContact;
@@ -104,6 +106,23 @@ impl ForceModel for ContactSet {
         let kk: Matrix3<f64> = self.direction * self.direction.transpose();
         for s in &self.springs {
             PenaltyContact::add_sample_block(a, &s.blocks, &s.beta, &kk, alpha * s.c);
+        }
+    }
+
+    /// Edge-form assembly: each spring is the rank-one term `−α c (β ⊗ k̂)(β ⊗ k̂)ᵀ`.
+    fn add_scaled_jacobians_edge(
+        &mut self,
+        _x: &[Vec3],
+        _v: &[Vec3],
+        alpha: f64,
+        _beta: f64,
+        a: &mut EdgeMatrix,
+        _scratch: &mut JacobianScratch,
+    ) {
+        for s in &self.springs {
+            // Triangle edges are mesh edges: in the side pattern.
+            let written = a.add_rank_one(s.nodes, s.beta, &self.direction, -alpha * s.c);
+            debug_assert!(written.is_ok());
         }
     }
 }

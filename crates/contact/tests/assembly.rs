@@ -7,7 +7,8 @@ use echothigh_contact::{
     ContactParams, ContactSet, ContactSpring, LocalStiffness, Probe, ProbeContact,
 };
 use echothigh_model::{
-    BlockSparse, ForceModel, JacobianScratch, ModelConfig, NoExtraForce, ThighModel, Vec3,
+    BlockSparse, EdgeMatrix, ForceModel, JacobianScratch, ModelConfig, NoExtraForce, SystemForm,
+    ThighModel, Vec3,
 };
 
 /// The default thigh pressed 10 mm by the probe at its top, and the contact.
@@ -98,6 +99,128 @@ fn contact_set_direct_assembly_equals_the_separate_jacobians() {
     old.add_scaled(-1.0, &k, 0.0, &b);
     let n = set.springs.len();
     assert_same_to_rounding(&direct, &old, &start, (-1.0, &k), (0.0, &b), n);
+}
+
+/// `model`'s start matrix `diag` (kg) plus `f`'s edge-form assembly, as a
+/// block-sparse matrix, with the rank-one terms kept (`capacity` large) or
+/// sent to the side matrix (`capacity` 0).
+fn edge_assembled(
+    model: &ThighModel,
+    f: &mut dyn ForceModel,
+    (alpha, beta): (f64, f64),
+    diag: &[f64],
+    capacity: usize,
+) -> BlockSparse {
+    let (x, v) = (model.positions(), model.velocities());
+    let mut edge = EdgeMatrix::new(model.pattern(), capacity);
+    let mut scratch = JacobianScratch::new(model.pattern());
+    edge.begin(diag);
+    f.add_scaled_jacobians_edge(x, v, alpha, beta, &mut edge, &mut scratch);
+    edge.finish();
+    assert_eq!(edge.side().is_some(), capacity == 0);
+    edge.to_block_sparse(model.pattern()).unwrap()
+}
+
+/// The edge form's rank-one contact terms (issue 18) are the penalty
+/// contact's and the contact set's blocks, to the same rounding bound as
+/// the direct assembly, kept as rank-one terms or sent to the side matrix.
+#[test]
+fn edge_form_contact_terms_equal_the_separate_jacobians() {
+    let (model, mut pc) = pressed();
+    let (x, v) = (model.positions().to_vec(), model.velocities().to_vec());
+    let mut set = contact_set(&model, &mut pc);
+    let contact = pc.contact_mut();
+    contact.prepare(&x, &v, 0.01);
+    let samples = contact.sample_surfaces().iter().flatten().count();
+    let mut start = model.pattern().clone();
+    start.add_to_diagonal(model.masses());
+    let (alpha, beta) = (-1e-4, -1e-2);
+    let (mut k, mut b) = (model.pattern().clone(), model.pattern().clone());
+    contact.add_jacobians(&x, &v, &mut k, &mut b);
+    let mut old = start.clone();
+    old.add_scaled(alpha, &k, beta, &b);
+    for capacity in [model.node_count(), 0] {
+        let edge = edge_assembled(&model, contact, (alpha, beta), model.masses(), capacity);
+        assert_same_to_rounding(&edge, &old, &start, (alpha, &k), (beta, &b), samples);
+    }
+    let zero = model.pattern().clone();
+    let (mut k, mut b) = (model.pattern().clone(), model.pattern().clone());
+    set.add_jacobians(&x, &v, &mut k, &mut b);
+    let mut old = zero.clone();
+    old.add_scaled(-1.0, &k, 0.0, &b);
+    let none = vec![0.0; model.node_count()];
+    let n = set.springs.len();
+    for capacity in [model.node_count(), 0] {
+        let edge = edge_assembled(&model, &mut set, (-1.0, 0.0), &none, capacity);
+        assert_same_to_rounding(&edge, &old, &zero, (-1.0, &k), (0.0, &b), n);
+    }
+}
+
+/// With the probe (contact forces, rank-one terms and the stiffness
+/// queries), the edge form follows the block-sparse reference: 60 steps
+/// pressing to 8 mm. Each form's Newton stops within `newton_tol` of its
+/// step's first update (at most the step's motion), so the trajectories
+/// may part by at most `2 newton_tol Σ max|Δx|` over the steps. The two
+/// stiffness solves each leave a residual `|r| ≤ stiffness_tol |C1|`, which
+/// moves `k = 1ᵀC(1 − w)` by `1ᵀC(T + C)⁻¹r`; with `C ⪯ T + C` this is of
+/// the order of `stiffness_tol · 1ᵀC1` (the rigid stiffness), and the test
+/// asks `|Δk| ≤ 2 stiffness_tol · 1ᵀC1` (an order-of-magnitude bound: the
+/// measured gap is at rounding level, ~1e-12 N/m).
+#[test]
+fn edge_form_with_contact_matches_the_reference() {
+    let config = ModelConfig::default();
+    let top = config.thigh.semi_axis_y;
+    let mut models = [
+        ThighModel::new(&config).unwrap(),
+        ThighModel::new(&config).unwrap(),
+    ];
+    models[1].set_system_form(SystemForm::BlockSparse);
+    let mut pcs = [
+        ProbeContact::new(&models[0], Probe::default(), ContactParams::default()).unwrap(),
+        ProbeContact::new(&models[1], Probe::default(), ContactParams::default()).unwrap(),
+    ];
+    let (mut bound, mut worst_k) = (0.0, 0.0f64);
+    for i in 1..=60 {
+        let depth = 0.008 * f64::from(i.min(40)) / 40.0;
+        let pose = Probe::exam_pose(Vec3::new(0.0, top - depth, 0.0));
+        let before = models[0].positions().to_vec();
+        let a = pcs[0].step(&mut models[0], &pose, 0.01);
+        let b = pcs[1].step(&mut models[1], &pose, 0.01);
+        assert!(a.physics.converged && b.physics.converged);
+        let moved = before
+            .iter()
+            .zip(models[0].positions())
+            .map(|(p, q)| (p - q).amax())
+            .fold(0.0, f64::max);
+        bound += 2.0 * config.integrator.newton_tol * moved;
+        let gap = models[0]
+            .positions()
+            .iter()
+            .zip(models[1].positions())
+            .map(|(p, q)| (p - q).amax())
+            .fold(0.0, f64::max);
+        assert!(gap <= bound, "step {i}: {gap:e} > {bound:e}");
+        let rigid = pcs[0].contact().params().stiffness
+            * pcs[0].contact().samples().1
+            * a.query.stiffness_springs as f64;
+        let dk = (a.sample.stiffness - b.sample.stiffness).abs();
+        assert!(
+            dk <= 2.0 * config.integrator.stiffness_tol * rigid,
+            "step {i}: k {} vs {} N/m",
+            a.sample.stiffness,
+            b.sample.stiffness
+        );
+        worst_k = worst_k.max(dk);
+        assert_eq!(a.sample.in_contact, b.sample.in_contact);
+    }
+    assert!(
+        pcs[0]
+            .contact()
+            .wrench(models[0].positions(), models[0].velocities())
+            .samples
+            > 0
+    );
+    println!("largest |Δk| {worst_k:e} N/m");
 }
 
 /// The contact springs of the probe's current contact.

@@ -3,7 +3,10 @@
 //! special-cases a spring type. Contact implements it.
 
 use crate::block_sparse::BlockSparse;
+use crate::edge_matrix::EdgeMatrix;
+use crate::timings::{seconds_since, StepTimings};
 use crate::Vec3;
+use std::time::Instant;
 
 /// A force on the mesh nodes and its Jacobians.
 ///
@@ -39,6 +42,25 @@ pub trait ForceModel {
         scratch.b.clear();
         self.add_jacobians(x, v, &mut scratch.k, &mut scratch.b);
         a.add_scaled(alpha, &scratch.k, beta, &scratch.b);
+    }
+
+    /// Adds `α ∂F/∂x + β ∂F/∂v` into the edge-form matrix `a` (the model's
+    /// system, issue 18): springs as [`EdgeMatrix::add_spring`], node blocks
+    /// as [`EdgeMatrix::add_diagonal`], a contact sample as
+    /// [`EdgeMatrix::add_rank_one`]. The default runs
+    /// [`Self::add_scaled_jacobians`] into `a`'s block-sparse side matrix:
+    /// exact for any model, but it costs a pass over the whole pattern, so
+    /// the models of the step override it.
+    fn add_scaled_jacobians_edge(
+        &mut self,
+        x: &[Vec3],
+        v: &[Vec3],
+        alpha: f64,
+        beta: f64,
+        a: &mut EdgeMatrix,
+        scratch: &mut JacobianScratch,
+    ) {
+        self.add_scaled_jacobians(x, v, alpha, beta, a.side_mut(), scratch);
     }
 
     /// Largest fraction `α ∈ [0, 1]` of the position change `dx` (m) from `x`
@@ -93,20 +115,49 @@ impl ForceModel for NoExtraForce {
         _scratch: &mut JacobianScratch,
     ) {
     }
+
+    fn add_scaled_jacobians_edge(
+        &mut self,
+        _x: &[Vec3],
+        _v: &[Vec3],
+        _alpha: f64,
+        _beta: f64,
+        _a: &mut EdgeMatrix,
+        _scratch: &mut JacobianScratch,
+    ) {
+    }
 }
 
-/// The sum of two force models (e.g. tissue + contact).
+/// The sum of two force models (e.g. tissue + contact). The time spent in
+/// `second` is kept apart in [`Self::second_timings`] (its `forces`,
+/// `assembly` and `step_fraction`), so that a step can report the contact's
+/// share as a stage of its own.
 pub struct SumForce<'a> {
     /// First model.
     pub first: &'a mut dyn ForceModel,
     /// Second model.
     pub second: &'a mut dyn ForceModel,
+    /// Seconds spent in `second`'s methods, accumulated by stage.
+    pub second_timings: StepTimings,
+}
+
+impl<'a> SumForce<'a> {
+    /// `first + second`, timers at zero.
+    pub fn new(first: &'a mut dyn ForceModel, second: &'a mut dyn ForceModel) -> Self {
+        SumForce {
+            first,
+            second,
+            second_timings: StepTimings::default(),
+        }
+    }
 }
 
 impl ForceModel for SumForce<'_> {
     fn add_forces(&mut self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
         self.first.add_forces(x, v, f);
+        let clock = Instant::now();
         self.second.add_forces(x, v, f);
+        self.second_timings.forces += seconds_since(clock);
     }
 
     fn add_jacobians(&mut self, x: &[Vec3], v: &[Vec3], k: &mut BlockSparse, b: &mut BlockSparse) {
@@ -125,8 +176,27 @@ impl ForceModel for SumForce<'_> {
     ) {
         self.first
             .add_scaled_jacobians(x, v, alpha, beta, a, scratch);
+        let clock = Instant::now();
         self.second
             .add_scaled_jacobians(x, v, alpha, beta, a, scratch);
+        self.second_timings.assembly += seconds_since(clock);
+    }
+
+    fn add_scaled_jacobians_edge(
+        &mut self,
+        x: &[Vec3],
+        v: &[Vec3],
+        alpha: f64,
+        beta: f64,
+        a: &mut EdgeMatrix,
+        scratch: &mut JacobianScratch,
+    ) {
+        self.first
+            .add_scaled_jacobians_edge(x, v, alpha, beta, a, scratch);
+        let clock = Instant::now();
+        self.second
+            .add_scaled_jacobians_edge(x, v, alpha, beta, a, scratch);
+        self.second_timings.assembly += seconds_since(clock);
     }
 
     fn max_step_fraction(&self, x: &[Vec3], dx: &[Vec3]) -> f64 {

@@ -41,9 +41,16 @@
 //!
 //! `K` omits the damper's `∂F/∂x` (not symmetric); Newton stays exact in the
 //! residual and converges, at worst linearly while the dampers work hard.
+//!
+//! **The matrix.** The system is assembled in edge form ([`EdgeMatrix`],
+//! solved by the fused [`EdgePcg`]); [`SystemForm::BlockSparse`] keeps the
+//! 3×3 block-sparse matrix and its [`Pcg`] as the reference implementation
+//! (same iterates in exact arithmetic, for same-run comparisons).
 
 use crate::block_sparse::BlockSparse;
 use crate::config::IntegratorParams;
+use crate::edge_matrix::EdgeMatrix;
+use crate::edge_pcg::EdgePcg;
 use crate::force_model::{ForceModel, JacobianScratch};
 use crate::pcg::{Pcg, PcgParams, SolveStats};
 use crate::timings::{seconds_since, StepTimings};
@@ -77,6 +84,17 @@ pub struct StepStats {
     pub timings: StepTimings,
 }
 
+/// Which matrix form the Newton systems are assembled and solved in.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SystemForm {
+    /// [`EdgeMatrix`] and the fused [`EdgePcg`] (the default).
+    #[default]
+    Edge,
+    /// [`BlockSparse`] and [`Pcg`]: the reference implementation.
+    BlockSparse,
+}
+
 /// The mutable state and the constant data of a system being stepped.
 pub struct Dynamics<'a> {
     /// Positions (m), updated in place.
@@ -96,9 +114,12 @@ pub struct Dynamics<'a> {
 /// Implicit Euler with Newton and PCG; owns only scratch memory.
 #[derive(Debug, Clone)]
 pub struct ImplicitEuler {
+    form: SystemForm,
     scratch: JacobianScratch,
     a: BlockSparse,
     pcg: Pcg,
+    edge: EdgeMatrix,
+    edge_pcg: EdgePcg,
     x0: Vec<Vec3>,
     v0: Vec<Vec3>,
     dv: Vec<Vec3>,
@@ -122,13 +143,18 @@ pub(crate) fn filter(v: &mut [Vec3], fixed: &[bool]) {
 }
 
 impl ImplicitEuler {
-    /// Scratch for systems with the block pattern of `pattern` (allocates once).
+    /// Scratch for systems with the block pattern of `pattern` (allocates
+    /// once), in edge form. Room for `n` rank-one terms (contact face
+    /// samples) per assembly; more go into the edge matrix's side matrix.
     pub fn new(pattern: &BlockSparse) -> Self {
         let n = pattern.n();
         let scratch = JacobianScratch::new(pattern);
         let vecs = || vec![Vec3::zeros(); n];
         ImplicitEuler {
+            form: SystemForm::Edge,
             a: scratch.k.clone(),
+            edge: EdgeMatrix::new(pattern, n),
+            edge_pcg: EdgePcg::new(n),
             scratch,
             pcg: Pcg::new(n),
             x0: vecs(),
@@ -143,6 +169,17 @@ impl ImplicitEuler {
             path: vecs(),
             diag_scratch: vec![0.0; n],
         }
+    }
+
+    /// The matrix form of the Newton systems.
+    pub fn system_form(&self) -> SystemForm {
+        self.form
+    }
+
+    /// Chooses the matrix form of the Newton systems (takes effect at the
+    /// next assembly; no allocation).
+    pub fn set_system_form(&mut self, form: SystemForm) {
+        self.form = form;
     }
 
     /// Forgets the warm start (after a reset of the state).
@@ -170,7 +207,9 @@ impl ImplicitEuler {
         filter(&mut self.v0, sys.fixed);
         self.dv.fill(Vec3::zeros());
         if lambda > 0.0 {
+            let clock = Instant::now();
             self.safe_start(h, lambda, sys.fixed, forces, &mut stats);
+            stats.timings.step_fraction += seconds_since(clock);
         }
         // Rounding floor of the residual's position equivalent (m): a
         // fraction of the model's size (see `IntegratorParams::newton_floor`).
@@ -211,7 +250,9 @@ impl ImplicitEuler {
             stats.newton_iterations += 1;
             stats.cg_iterations += solve.iterations;
             stats.cg_residual = solve.residual;
+            let clock = Instant::now();
             self.limit_and_update(h, lambda, forces, &mut stats);
+            stats.timings.step_fraction += seconds_since(clock);
         }
         // Commit: v₁ = v₀ + Δv, x₁ = x₀ + h (v₀ + λ Δv).
         for i in 0..sys.x.len() {
@@ -290,16 +331,32 @@ impl ImplicitEuler {
     ) -> SolveStats {
         let (ck, cb) = (-lambda * lambda * h * h, -lambda * h);
         let clock = Instant::now();
-        self.a.clear();
-        self.a.add_to_diagonal(sys.mass);
-        forces.add_scaled_jacobians(
-            &self.x_eval,
-            &self.v_eval,
-            ck,
-            cb,
-            &mut self.a,
-            &mut self.scratch,
-        );
+        match self.form {
+            SystemForm::Edge => {
+                self.edge.begin(sys.mass);
+                forces.add_scaled_jacobians_edge(
+                    &self.x_eval,
+                    &self.v_eval,
+                    ck,
+                    cb,
+                    &mut self.edge,
+                    &mut self.scratch,
+                );
+                self.edge.finish();
+            }
+            SystemForm::BlockSparse => {
+                self.a.clear();
+                self.a.add_to_diagonal(sys.mass);
+                forces.add_scaled_jacobians(
+                    &self.x_eval,
+                    &self.v_eval,
+                    ck,
+                    cb,
+                    &mut self.a,
+                    &mut self.scratch,
+                );
+            }
+        }
         stats.timings.assembly += seconds_since(clock);
         let clock = Instant::now();
         if first {
@@ -307,9 +364,7 @@ impl ImplicitEuler {
         } else {
             self.delta.fill(Vec3::zeros());
         }
-        let mut solve = self
-            .pcg
-            .solve(&self.a, &self.r, &mut self.delta, sys.fixed, pcg);
+        let mut solve = self.solve_assembled(sys.fixed, pcg);
         let mut shift = 0.0;
         while solve.indefinite && shift < 64.0 {
             stats.regularized += 1;
@@ -318,11 +373,12 @@ impl ImplicitEuler {
                 *d = m * (next - shift);
             }
             shift = next;
-            self.a.add_to_diagonal(&self.diag_scratch);
+            match self.form {
+                SystemForm::Edge => self.edge.add_to_diagonal(&self.diag_scratch),
+                SystemForm::BlockSparse => self.a.add_to_diagonal(&self.diag_scratch),
+            }
             self.delta.fill(Vec3::zeros());
-            let retry = self
-                .pcg
-                .solve(&self.a, &self.r, &mut self.delta, sys.fixed, pcg);
+            let retry = self.solve_assembled(sys.fixed, pcg);
             solve = SolveStats {
                 iterations: solve.iterations + retry.iterations,
                 ..retry
@@ -333,6 +389,20 @@ impl ImplicitEuler {
         }
         stats.timings.pcg += seconds_since(clock);
         solve
+    }
+
+    /// Solves the assembled system (of the current form) for `delta`, right-hand side `r`.
+    fn solve_assembled(&mut self, fixed: &[bool], pcg: &PcgParams) -> SolveStats {
+        match self.form {
+            SystemForm::Edge => {
+                self.edge_pcg
+                    .solve(&self.edge, &self.r, &mut self.delta, fixed, pcg)
+            }
+            SystemForm::BlockSparse => {
+                self.pcg
+                    .solve(&self.a, &self.r, &mut self.delta, fixed, pcg)
+            }
+        }
     }
 
     /// Cuts δ to stay in the domain at both the evaluation and the end point, then `Δv += α δ`.
@@ -380,17 +450,41 @@ impl ImplicitEuler {
         rhs: &[Vec3],
         out: &mut [Vec3],
     ) -> SolveStats {
-        self.a.clear();
-        forces.add_scaled_jacobians(x, v, -1.0, 0.0, &mut self.a, &mut self.scratch);
         let pcg = PcgParams {
             tol: params.stiffness_tol,
             ..params.pcg()
         };
-        self.pcg.solve(&self.a, rhs, out, fixed, &pcg)
+        match self.form {
+            SystemForm::Edge => {
+                self.diag_scratch.fill(0.0);
+                self.edge.begin(&self.diag_scratch);
+                forces.add_scaled_jacobians_edge(
+                    x,
+                    v,
+                    -1.0,
+                    0.0,
+                    &mut self.edge,
+                    &mut self.scratch,
+                );
+                self.edge.finish();
+                self.edge_pcg.solve(&self.edge, rhs, out, fixed, &pcg)
+            }
+            SystemForm::BlockSparse => {
+                self.a.clear();
+                forces.add_scaled_jacobians(x, v, -1.0, 0.0, &mut self.a, &mut self.scratch);
+                self.pcg.solve(&self.a, rhs, out, fixed, &pcg)
+            }
+        }
     }
 
-    /// The last assembled system matrix (`M − λhB − λ²h²K` or `−K`).
+    /// The last block-sparse system matrix (`M − λhB − λ²h²K` or `−K`)
+    /// assembled in [`SystemForm::BlockSparse`].
     pub fn system_matrix(&self) -> &BlockSparse {
         &self.a
+    }
+
+    /// The last edge-form system matrix assembled in [`SystemForm::Edge`].
+    pub fn edge_matrix(&self) -> &EdgeMatrix {
+        &self.edge
     }
 }

@@ -3,7 +3,8 @@
 //! linear springs `f = a x` with dampers, and nonlinear normal springs
 //! `f(x) = x/(a x + b)` to an inner layer of fixed anchors — integrated with
 //! implicit Euler (Eq. 1), Newton iterations and a preconditioned conjugate
-//! gradient on a 3×3 block-sparse matrix of fixed pattern.
+//! gradient on an edge-form matrix (one `p d dᵀ + q I` block per spring and a
+//! dense block diagonal; the 3×3 block-sparse form is kept as the reference).
 //!
 //! ```
 //! use echothigh_model::{ModelConfig, NoExtraForce, ThighModel, Vec3};
@@ -20,6 +21,8 @@
 pub mod block_sparse;
 pub mod checkpoint;
 pub mod config;
+pub mod edge_matrix;
+pub mod edge_pcg;
 pub mod force_model;
 pub mod integrator;
 pub mod leg;
@@ -36,8 +39,10 @@ pub type Vec3 = nalgebra::Vector3<f64>;
 pub use block_sparse::{BlockSparse, PatternError};
 pub use checkpoint::{DivergedError, MAX_POSITION, MAX_SPEED};
 pub use config::{ConfigError, IntegratorParams, ModelConfig, ThighGeometry, TissueParams};
+pub use edge_matrix::{EdgeMatrix, EdgeTerm, RankOneTerm};
+pub use edge_pcg::EdgePcg;
 pub use force_model::{ForceModel, JacobianScratch, NoExtraForce, SumForce};
-pub use integrator::{Dynamics, ImplicitEuler, StepStats};
+pub use integrator::{Dynamics, ImplicitEuler, StepStats, SystemForm};
 pub use leg::{HandTarget, LegNode, LegSurface};
 pub use mesh::{Edge, EdgeKind, SurfaceMesh};
 pub use pcg::{Pcg, PcgParams, Preconditioner, SolveStats};

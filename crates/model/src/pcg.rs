@@ -70,6 +70,26 @@ fn filter(v: &mut [Vec3], fixed: &[bool]) {
     }
 }
 
+/// The block-Jacobi inverse of a diagonal block `d`: the closed-form
+/// inverse of its symmetric part if that is positive definite (Sylvester's
+/// criterion), else scalar Jacobi on `|diagonal|` (1 where it is zero).
+pub(crate) fn block_jacobi_inverse(d: &Matrix3<f64>) -> Matrix3<f64> {
+    let m = (d + d.transpose()) * 0.5;
+    let spd = m[(0, 0)] > 0.0
+        && m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)] > 0.0
+        && m.determinant() > 0.0;
+    match m.try_inverse() {
+        Some(inv) if spd => inv,
+        _ => Matrix3::from_diagonal(&d.diagonal().map(|v| {
+            if v.abs() > 0.0 {
+                1.0 / v.abs()
+            } else {
+                1.0
+            }
+        })),
+    }
+}
+
 impl Pcg {
     /// Scratch for `n` nodes (allocates once).
     pub fn new(n: usize) -> Self {
@@ -182,24 +202,7 @@ impl Pcg {
                 Preconditioner::None => Matrix3::identity(),
                 Preconditioner::BlockJacobi if fixed[i] => Matrix3::zeros(),
                 Preconditioner::BlockJacobi => {
-                    let d = a.values()[a.diagonal_index(i)];
-                    // Closed-form inverse of the (symmetrized) 3×3 block if it
-                    // is positive definite (Sylvester's criterion), else scalar
-                    // Jacobi on |diagonal|.
-                    let m = (d + d.transpose()) * 0.5;
-                    let spd = m[(0, 0)] > 0.0
-                        && m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)] > 0.0
-                        && m.determinant() > 0.0;
-                    match m.try_inverse() {
-                        Some(inv) if spd => inv,
-                        _ => Matrix3::from_diagonal(&d.diagonal().map(|v| {
-                            if v.abs() > 0.0 {
-                                1.0 / v.abs()
-                            } else {
-                                1.0
-                            }
-                        })),
-                    }
+                    block_jacobi_inverse(&a.values()[a.diagonal_index(i)])
                 }
             };
         }

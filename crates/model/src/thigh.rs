@@ -5,7 +5,7 @@
 use crate::block_sparse::BlockSparse;
 use crate::config::{ConfigError, ModelConfig};
 use crate::force_model::{ForceModel, SumForce};
-use crate::integrator::{filter, Dynamics, ImplicitEuler, StepStats};
+use crate::integrator::{filter, Dynamics, ImplicitEuler, StepStats, SystemForm};
 use crate::mesh::SurfaceMesh;
 use crate::pcg::SolveStats;
 use crate::tissue::TissueForces;
@@ -84,10 +84,7 @@ impl ThighModel {
     /// (e.g. the probe contact) and the external forces: implicit Euler,
     /// Eq. 1 (see [`crate::integrator`]). Allocates nothing.
     pub fn step(&mut self, h: f64, extra: &mut dyn ForceModel) -> StepStats {
-        let mut forces = SumForce {
-            first: &mut self.tissue,
-            second: extra,
-        };
+        let mut forces = SumForce::new(&mut self.tissue, extra);
         let sys = Dynamics {
             x: &mut self.x,
             v: &mut self.v,
@@ -96,9 +93,14 @@ impl ThighModel {
             external: &self.external,
             gravity: Vec3::from(self.config.tissue.gravity),
         };
-        let stats = self
+        let mut stats = self
             .integrator
             .step(sys, h, &self.config.integrator, &mut forces);
+        // The extra model's share becomes a stage of its own.
+        let extra_time = forces.second_timings;
+        stats.timings.forces = (stats.timings.forces - extra_time.forces).max(0.0);
+        stats.timings.assembly = (stats.timings.assembly - extra_time.assembly).max(0.0);
+        stats.timings.contact += extra_time.forces + extra_time.assembly;
         if stats.finite {
             self.time += h;
         }
@@ -147,10 +149,7 @@ impl ThighModel {
         rhs: &[Vec3],
         out: &mut [Vec3],
     ) -> SolveStats {
-        let mut forces = SumForce {
-            first: &mut self.tissue,
-            second: extra,
-        };
+        let mut forces = SumForce::new(&mut self.tissue, extra);
         self.integrator.solve_stiffness(
             &self.x,
             &self.v,
@@ -198,6 +197,18 @@ impl ThighModel {
         assert!(w.len() == self.x.len() && out.len() == self.x.len());
         out.fill(Vec3::zeros());
         self.tissue.add_stiffness_product(&self.x, 1.0, w, out);
+    }
+
+    /// The matrix form of the Newton systems ([`SystemForm::Edge`] unless set).
+    pub fn system_form(&self) -> SystemForm {
+        self.integrator.system_form()
+    }
+
+    /// Chooses the matrix form of the Newton and stiffness systems
+    /// ([`SystemForm::BlockSparse`] is the reference implementation, for
+    /// same-run comparisons and tests).
+    pub fn set_system_form(&mut self, form: SystemForm) {
+        self.integrator.set_system_form(form);
     }
 
     /// Back to rest: rest positions, zero velocities, zero external forces, time 0.

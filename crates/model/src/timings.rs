@@ -15,31 +15,42 @@ pub struct StepTimings {
     /// Contact broad and narrow phase (grid rebuild, surface under the
     /// probe's face samples), s.
     pub broad_phase: f64,
-    /// Force evaluations of the Newton iterations (residuals), s.
+    /// Force evaluations of the Newton iterations (tissue forces and
+    /// residuals; the contact's share is in [`Self::contact`]), s.
     pub forces: f64,
-    /// Newton matrix assembly `M − λhB − λ²h²K` (tissue + contact), s.
+    /// Newton matrix assembly `M − λhB − λ²h²K` (tissue; the contact's
+    /// share is in [`Self::contact`]), s.
     pub assembly: f64,
-    /// Preconditioned conjugate gradient of the Newton solves, s.
+    /// Preconditioned conjugate gradient of the Newton solves (with the
+    /// preconditioner's set-up), s.
     pub pcg: f64,
     /// Local stiffness query: its assembly, solve and `K w`, s.
     pub stiffness_solve: f64,
     /// Distance query (closest surface point to the probe), s.
     pub distance_query: f64,
+    /// The asymptote limiter: the largest step fraction that keeps the
+    /// force models in their domain (start and Newton updates), s.
+    pub step_fraction: f64,
+    /// The extra force model's (the probe contact's) forces and Jacobians
+    /// during the Newton iterations, s.
+    pub contact: f64,
 }
 
 impl StepTimings {
     /// Field names, in the order of [`Self::values`] (e.g. CSV columns).
-    pub const NAMES: [&'static str; 6] = [
+    pub const NAMES: [&'static str; 8] = [
         "broad_phase",
         "forces",
         "assembly",
         "pcg",
         "stiffness_solve",
         "distance_query",
+        "step_fraction",
+        "contact",
     ];
 
     /// The stage times in the order of [`Self::NAMES`], s.
-    pub fn values(&self) -> [f64; 6] {
+    pub fn values(&self) -> [f64; 8] {
         [
             self.broad_phase,
             self.forces,
@@ -47,6 +58,8 @@ impl StepTimings {
             self.pcg,
             self.stiffness_solve,
             self.distance_query,
+            self.step_fraction,
+            self.contact,
         ]
     }
 
@@ -63,6 +76,8 @@ impl StepTimings {
         self.pcg += other.pcg;
         self.stiffness_solve += other.stiffness_solve;
         self.distance_query += other.distance_query;
+        self.step_fraction += other.step_fraction;
+        self.contact += other.contact;
     }
 }
 

@@ -11,6 +11,7 @@
 
 use crate::block_sparse::BlockSparse;
 use crate::config::TissueParams;
+use crate::edge_matrix::EdgeMatrix;
 use crate::force_model::{ForceModel, JacobianScratch};
 use crate::mesh::{EdgeKind, SurfaceMesh};
 use crate::springs::{
@@ -57,6 +58,9 @@ struct NormalSpring {
 pub struct TissueForces {
     springs: Vec<LinearSpring>,
     normals: Vec<NormalSpring>,
+    /// `(anchor, min_length)` of node `k`'s normal spring (m): the 32 bytes
+    /// the step limiter reads, apart from the 248-byte spring.
+    limits: Vec<(Vec3, f64)>,
     geometric_in_compression: bool,
 }
 
@@ -138,9 +142,11 @@ impl TissueForces {
                     diag: pattern.diagonal_index(k),
                 }
             })
-            .collect();
+            .collect::<Vec<NormalSpring>>();
+        debug_assert!(normals.iter().enumerate().all(|(k, s)| s.node == k));
         TissueForces {
             springs,
+            limits: normals.iter().map(|s| (s.anchor, s.min_length)).collect(),
             normals,
             geometric_in_compression,
         }
@@ -250,7 +256,18 @@ fn path_fraction(p: &Vec3, d: &Vec3, l_min: f64) -> f64 {
 
 impl ForceModel for TissueForces {
     fn add_forces(&mut self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
+        // The mesh lists a node's springs together: node i's force stays
+        // in a register while its group lasts (no store-to-load chain).
+        let mut row = usize::MAX;
+        let mut acc = Vec3::zeros();
         for s in &self.springs {
+            if s.i != row {
+                if row != usize::MAX {
+                    f[row] += acc;
+                }
+                row = s.i;
+                acc = Vec3::zeros();
+            }
             // f_i = (a e + c ė) d: spring and damper along the same direction.
             let delta = x[s.j] - x[s.i];
             let l = delta.norm();
@@ -259,8 +276,11 @@ impl ForceModel for TissueForces {
             }
             let rate = (v[s.j] - v[s.i]).dot(&delta) / l;
             let fi = delta * ((linear_force(s.a, l - s.rest) + s.c * rate) / l);
-            f[s.i] += fi;
+            acc += fi;
             f[s.j] -= fi;
+        }
+        if row != usize::MAX {
+            f[row] += acc;
         }
         let zero = Vec3::zeros();
         for s in &self.normals {
@@ -311,6 +331,42 @@ impl ForceModel for TissueForces {
         }
     }
 
+    /// Streaming edge-form assembly: one `(d, p, q)` per spring, in mesh
+    /// order (`α S + β c d dᵀ`: `p = α (a − g) + β c`, `q = α g`), then one
+    /// diagonal block per normal spring.
+    fn add_scaled_jacobians_edge(
+        &mut self,
+        x: &[Vec3],
+        _v: &[Vec3],
+        alpha: f64,
+        beta: f64,
+        a: &mut EdgeMatrix,
+        _scratch: &mut JacobianScratch,
+    ) {
+        let geo = self.geometric_in_compression;
+        for s in &self.springs {
+            let delta = x[s.j] - x[s.i];
+            let l = delta.norm();
+            if l <= f64::MIN_POSITIVE {
+                continue;
+            }
+            let d = delta / l;
+            let f = linear_force(s.a, l - s.rest);
+            let g = if f < 0.0 && !geo { 0.0 } else { f / l };
+            let p = alpha * (s.a - g) + beta * s.c;
+            // (i, j) is a mesh edge, in the side matrix's pattern.
+            let written = a.add_spring(s.i, s.j, &d, p, alpha * g);
+            debug_assert!(written.is_ok());
+        }
+        for s in &self.normals {
+            let law = |e| (normal_force(s.a, s.b, e), normal_stiffness(s.a, s.b, e));
+            let (_, stiff) = spring_force_jacobian(&x[s.node], &s.anchor, s.rest, law, geo);
+            let damp = damper_jacobian(&x[s.node], &s.anchor, s.c);
+            let block = (stiff + s.tangential_k) * alpha + (damp + s.tangential_c) * beta;
+            a.add_diagonal(s.node, &-block);
+        }
+    }
+
     fn add_jacobians(&mut self, x: &[Vec3], _v: &[Vec3], k: &mut BlockSparse, b: &mut BlockSparse) {
         let geo = self.geometric_in_compression;
         for s in &self.springs {
@@ -341,9 +397,10 @@ impl ForceModel for TissueForces {
     /// Keeps every normal spring longer than `rest − (1 − margin) b/a` along
     /// the straight path from `x` to `x + dx`.
     fn max_step_fraction(&self, x: &[Vec3], dx: &[Vec3]) -> f64 {
-        self.normals
+        self.limits
             .iter()
-            .map(|s| path_fraction(&(x[s.node] - s.anchor), &dx[s.node], s.min_length))
+            .zip(x.iter().zip(dx))
+            .map(|((anchor, min_length), (x, dx))| path_fraction(&(x - anchor), dx, *min_length))
             .fold(1.0, f64::min)
     }
 }

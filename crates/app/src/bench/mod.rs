@@ -8,6 +8,7 @@ pub mod image;
 pub mod link;
 pub mod physics;
 pub mod physics_cases;
+pub mod physics_compare;
 
 use clap::Subcommand;
 

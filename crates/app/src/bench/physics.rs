@@ -7,6 +7,11 @@
 //! cost, which other processes on a shared machine do not inflate). Each
 //! case also reports the median time of each stage of the step
 //! (`stage_median_s`: `echothigh_model::StepTimings`, monotonic clock).
+//!
+//! `--compare` runs instead the same-run A/B of the edge-form system
+//! against the block-sparse reference (issue 18; see
+//! [`super::physics_compare`]): the press case at each size and the
+//! contact case with its queries, reporting the ratio of the medians.
 
 use std::path::PathBuf;
 
@@ -38,12 +43,19 @@ pub struct Args {
     /// average-female, obese; issue 12) instead of the elliptic cylinder.
     #[arg(long)]
     patient: Option<String>,
+    /// Same-run A/B instead: the block-sparse reference against the edge
+    /// form, interleaved, medians of thread CPU time and their ratio.
+    #[arg(long)]
+    compare: bool,
 }
 
 /// Runs the benchmark, prints the table on stderr, writes/prints the JSON.
 pub fn run(args: Args) -> anyhow::Result<()> {
     if !(args.steps_scale.is_finite() && args.steps_scale > 0.0) {
         anyhow::bail!("--steps-scale must be > 0, got {}", args.steps_scale);
+    }
+    if args.compare {
+        return run_compare(&args);
     }
     let mut cases = Vec::new();
     eprintln!(
@@ -85,6 +97,57 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         // Issue 18's goals, one core: 10k nodes press, and the default mesh
         // with the contact queries (see `contact.steps_per_second`).
         "goals": { "nodes_10k_press_steps_per_s": 250.0, "default_mesh_with_queries_steps_per_s": 3000.0 },
+        "cases": cases,
+    });
+    let text = serde_json::to_string_pretty(&json)?;
+    if let Some(path) = &args.out {
+        std::fs::write(path, &text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    if args.json {
+        println!("{text}");
+    }
+    Ok(())
+}
+
+/// `--compare`: the A/B per size (press) and the contact case.
+fn run_compare(args: &Args) -> anyhow::Result<()> {
+    use super::physics_compare::{compare_contact, compare_press, CompareReport};
+    let mut cases: Vec<CompareReport> = Vec::new();
+    eprintln!(
+        "{:<8} {:>6} {:>6}  {:>12} {:>12} {:>7} {:>10} {:>11}",
+        "case", "nodes", "steps", "old CPU µs", "new CPU µs", "ratio", "new st/s", "max gap m"
+    );
+    let print = |r: &CompareReport| {
+        eprintln!(
+            "{:<8} {:>6} {:>6}  {:>12.1} {:>12.1} {:>7.2} {:>10.1} {:>11.2e}",
+            r.case,
+            r.nodes,
+            r.steps,
+            r.old_cpu_median_us,
+            r.new_cpu_median_us,
+            r.ratio,
+            r.new_cpu_steps_per_s,
+            r.max_position_gap_m
+        )
+    };
+    for &(nt, nz, steps) in SIZES.iter().filter(|(nt, nz, _)| nt * nz <= args.max_nodes) {
+        let steps = ((steps as f64 * args.steps_scale).round() as usize).max(1);
+        let r = compare_press(nt, nz, steps, args.warmup)
+            .with_context(|| format!("building the {nt}×{nz} mesh"))?;
+        print(&r);
+        cases.push(r);
+    }
+    if args.contact_steps > 0 {
+        let r = compare_contact(args.contact_steps)?;
+        print(&r);
+        cases.push(r);
+    }
+    let json = serde_json::json!({
+        "bench": "physics_compare",
+        "profile": if cfg!(debug_assertions) { "debug" } else { "release" },
+        "threads": 1,
+        "old": "block_sparse",
+        "new": "edge",
         "cases": cases,
     });
     let text = serde_json::to_string_pretty(&json)?;

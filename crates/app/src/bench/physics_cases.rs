@@ -108,6 +108,8 @@ pub fn stage_medians(timings: &[StepTimings]) -> StepTimings {
         pcg: median(|t| t.pcg),
         stiffness_solve: median(|t| t.stiffness_solve),
         distance_query: median(|t| t.distance_query),
+        step_fraction: median(|t| t.step_fraction),
+        contact: median(|t| t.contact),
     }
 }
 
