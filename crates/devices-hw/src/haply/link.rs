@@ -10,15 +10,15 @@
 //!
 //! **Why not the crate's `HaplyDevice`.** The backend uses the `haply`
 //! crate's message types ([`super::wire`]) but its own blocking
-//! `tungstenite` socket, for three reasons found in `haply` 1.3.1's source:
-//! its listener task (`InverseWebSocketClient::listen`) loops on
-//! `reader.next()` and ignores `None` and errors, so once the service closes
-//! the socket it spins without awaiting anything, which burns a core and
-//! starves a single-threaded runtime, and `abort` cannot stop a task that
-//! never yields; it keeps no link between a command and the state frame that
-//! answers it, which a lockstep watchdog needs; and every frame goes through
-//! two `tokio::sync::Mutex`es shared with that listener. A plain socket with
-//! a read timeout reports a dead service as an error on the next round trip.
+//! `tungstenite` socket, for reasons read in `haply` 1.3.1's source (not
+//! measured): its listener task (`InverseWebSocketClient::listen`) handles
+//! only `Some(Ok(Text))` from `reader.next()` and loops again on `None` or an
+//! error, so after the service closes the socket the loop keeps polling a
+//! finished stream instead of reporting the loss; it keeps no link between a
+//! command and the state frame that answers it, which a lockstep watchdog
+//! needs; and every frame goes through `tokio::sync::Mutex`es shared with
+//! that listener. A plain socket with a read timeout reports a dead service
+//! as an error on the next round trip (tested against the emulator).
 
 use super::wire::{self, CommandFrame, Inventory, Reading};
 use crate::servo::{ServoSide, ServoState, FAULT_LOST};
