@@ -128,3 +128,38 @@ fn the_scenario_selects_the_haply_device_and_the_thigh_pushes_it_out() {
     assert_eq!(emu.closed_with_force(), 0);
     std::fs::remove_dir_all(&out).ok();
 }
+
+#[test]
+fn bench_haptics_times_the_tick_through_the_emulated_service() {
+    let emu = InverseService::start().unwrap();
+    let o = Command::new(BIN)
+        .args([
+            "bench",
+            "haptics",
+            "--device",
+            "haply",
+            "--device-ticks",
+            "300",
+        ])
+        .env("ECHOTHIGH_HAPLY_URL", emu.url())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let results = report["results"].as_array().unwrap();
+    assert_eq!(results.len(), 2);
+    for (r, name) in results.iter().zip(["simulated", "haply"]) {
+        assert_eq!(r["device"], name);
+        assert_eq!(r["ticks"], 300);
+        // Order statistics of one sample: median ≤ p99 ≤ p99.9, times ≥ 0.
+        let c = &r["tick_compute"];
+        let (m, p99, p999) = (
+            c["median_us"].as_f64().unwrap(),
+            c["p99_us"].as_f64().unwrap(),
+            c["p999_us"].as_f64().unwrap(),
+        );
+        assert!(0.0 <= m && m <= p99 && p99 <= p999, "{c}");
+    }
+    // The benchmark's device left no force behind.
+    assert_eq!(emu.closed_with_force(), 0);
+}
