@@ -7,6 +7,9 @@
 //!   scheduled callbacks at 1 kHz, frames, parameters in mm and N, errors.
 //! - [`dhd`]: the Force Dimension DHD API (`libdhd`): open/close, position in
 //!   m, orientation frame, force, the firmware's force watchdog.
+//! - [`inverse`] (feature `haply`): Haply's Inverse Service, a local
+//!   WebSocket server in the `haply` crate's message types, used in-process
+//!   by the tests (a Rust API rather than C functions).
 //!
 //! **No hardware is emulated faithfully beyond its interface**: each device is
 //! a point mass with viscous damping ([`arm::Arm`]) moved by the commanded
@@ -26,6 +29,8 @@
 pub mod arm;
 pub mod dhd;
 pub mod hd;
+#[cfg(feature = "haply")]
+pub mod inverse;
 
 use std::sync::OnceLock;
 use std::time::Instant;

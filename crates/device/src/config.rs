@@ -25,10 +25,43 @@ use crate::device::ForceScale;
 use crate::error::ConfigError;
 use serde::{Deserialize, Serialize};
 
+/// Which device a scenario's haptic loop drives (`[device] kind`). The real
+/// devices' settings are the `[device.hardware]` keys of a `--hardware`
+/// file (crate `echothigh-devices-hw`), which this crate does not depend on.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum DeviceKindSetting {
+    /// The simulated PHANToM-class device below, moved by `[hand]` and `[exam]`.
+    #[default]
+    Simulated,
+    /// 3D Systems Touch / PHANTOM through OpenHaptics HD.
+    Openhaptics,
+    /// Force Dimension delta / omega / sigma / Falcon through DHD.
+    Forcedimension,
+    /// Haply Inverse3 (+ VerseGrip) through Haply's Inverse Service.
+    Haply,
+}
+
+impl DeviceKindSetting {
+    /// The name used in the scenario and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            DeviceKindSetting::Simulated => "simulated",
+            DeviceKindSetting::Openhaptics => "openhaptics",
+            DeviceKindSetting::Forcedimension => "forcedimension",
+            DeviceKindSetting::Haply => "haply",
+        }
+    }
+}
+
 /// Parameters of the simulated PHANToM-class device (`[device]`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct DeviceConfig {
+    /// The device the run drives: `simulated` (default), `openhaptics`,
+    /// `forcedimension` or `haply`; `--device` on the command line wins.
+    /// The other keys describe the simulated device only.
+    pub kind: DeviceKindSetting,
     /// Apparent end-effector mass at the stylus tip (kg), in [0.01, 5]: from
     /// the lightest desktop devices (~20 g) to large arm-scale devices (a few
     /// kg). Default 0.075.
@@ -63,6 +96,7 @@ pub struct DeviceConfig {
 impl Default for DeviceConfig {
     fn default() -> Self {
         DeviceConfig {
+            kind: DeviceKindSetting::Simulated,
             mass: 0.075,
             viscous_friction: 1.0,
             max_force: 6.0,

@@ -39,7 +39,7 @@ mod hand;
 mod replay;
 mod simulated;
 
-pub use config::{DeviceConfig, HandConfig};
+pub use config::{DeviceConfig, DeviceKindSetting, HandConfig};
 pub use device::{limit_force, DeviceFaults, ForceScale, HapticDevice};
 pub use error::{ConfigError, ReplayError};
 pub use exam::{ExamConfig, ExamInput, ExamPhase, ExamScript, ExamStatus, PhaseConfig, MAX_PHASES};

@@ -5,7 +5,9 @@
 //! (`set_force` + `advance`, wall clock around the calls, which do no I/O
 //! and never wait; a preemption shows in the tail) and the period error (actual start
 //! to start − 1 ms), as median, p99 and p99.9, printed as one JSON document.
-//! The emulator library is the one cargo built as this crate's dev-dependency.
+//! The emulator library is the one cargo built as this crate's dev-dependency;
+//! the Haply backend talks to the in-process Inverse Service emulator over
+//! loopback (its round trips run on the exchange thread, off the tick).
 
 use echothigh_device::{DeviceConfig, HapticDevice, SimulatedDevice};
 use echothigh_devices_hw::{open_device, DeviceKind, HardwareConfig, Vec3};
@@ -81,6 +83,14 @@ fn main() {
         Some(path) => {
             std::env::set_var("ECHOTHIGH_HD_LIB", &path);
             std::env::set_var("ECHOTHIGH_DHD_LIB", &path);
+            #[cfg(feature = "haply")]
+            let _service = match echothigh_device_emu::inverse::InverseService::start() {
+                Ok(s) => {
+                    std::env::set_var("ECHOTHIGH_HAPLY_URL", s.url());
+                    Some(s)
+                }
+                Err(_) => None,
+            };
             for kind in DeviceKind::ALL {
                 match open_device(&kind, &HardwareConfig::default()) {
                     Ok(mut d) => {

@@ -17,17 +17,24 @@ pub enum DeviceKind {
     Openhaptics,
     /// Force Dimension delta / omega / sigma (and the Novint Falcon) through DHD (`libdhd`).
     Forcedimension,
+    /// Haply Inverse3 (with a VerseGrip for orientation) through Haply's local Inverse Service.
+    Haply,
 }
 
 impl DeviceKind {
     /// Every backend, in the order `echothigh devices` lists them.
-    pub const ALL: [DeviceKind; 2] = [DeviceKind::Openhaptics, DeviceKind::Forcedimension];
+    pub const ALL: [DeviceKind; 3] = [
+        DeviceKind::Openhaptics,
+        DeviceKind::Forcedimension,
+        DeviceKind::Haply,
+    ];
 
     /// The name used on the command line and in the scenario.
     pub fn name(self) -> &'static str {
         match self {
             DeviceKind::Openhaptics => "openhaptics",
             DeviceKind::Forcedimension => "forcedimension",
+            DeviceKind::Haply => "haply",
         }
     }
 }
@@ -40,7 +47,7 @@ impl fmt::Display for DeviceKind {
 
 /// An unknown backend name.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("unknown device backend `{0}`: expected one of openhaptics, forcedimension")]
+#[error("unknown device backend `{0}`: expected one of openhaptics, forcedimension, haply")]
 pub struct UnknownDeviceKind(pub String);
 
 impl FromStr for DeviceKind {
@@ -72,6 +79,8 @@ pub struct HardwareConfig {
     pub openhaptics: OpenHapticsConfig,
     /// Force Dimension settings.
     pub forcedimension: ForceDimensionConfig,
+    /// Haply Inverse Service settings.
+    pub haply: HaplyConfig,
 }
 
 /// `[device.hardware.openhaptics]`.
@@ -103,6 +112,36 @@ impl Default for ForceDimensionConfig {
     }
 }
 
+/// `[device.hardware.haply]`: how to reach Haply's Inverse Service.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct HaplyConfig {
+    /// WebSocket address of the service's simulation channel (the environment
+    /// variable `ECHOTHIGH_HAPLY_URL` wins). Default `ws://localhost:10001`
+    /// (Inverse Service 3.5: simulation channel and HTTP on port 10001).
+    pub url: Option<String>,
+    /// The Inverse3 to drive, by its `device_id`; default: the first listed.
+    pub device_id: Option<String>,
+    /// Rate of the exchange thread's command/state round trips (Hz). Default 1000.
+    pub rate: f64,
+    /// Connecting and the WebSocket handshake give up after this long (s). Default 1.
+    pub connect_timeout: f64,
+    /// A state frame not answered within this long declares the service lost (s). Default 0.1.
+    pub reply_timeout: f64,
+}
+
+impl Default for HaplyConfig {
+    fn default() -> Self {
+        HaplyConfig {
+            url: None,
+            device_id: None,
+            rate: 1000.0,
+            connect_timeout: 1.0,
+            reply_timeout: 0.1,
+        }
+    }
+}
+
 impl Default for HardwareConfig {
     fn default() -> Self {
         HardwareConfig {
@@ -113,6 +152,7 @@ impl Default for HardwareConfig {
             thermal_time_constant: ThermalLimiter::DEFAULT_TAU,
             openhaptics: OpenHapticsConfig::default(),
             forcedimension: ForceDimensionConfig::default(),
+            haply: HaplyConfig::default(),
         }
     }
 }
@@ -156,6 +196,28 @@ impl HardwareConfig {
                 self.forcedimension.servo_rate,
                 "must be <= 10000 Hz (DHD devices run up to 8 kHz)",
             ));
+        }
+        let haply = format!("{prefix}.haply");
+        ConfigError::positive(&haply, "rate", self.haply.rate)?;
+        if self.haply.rate > 10_000.0 {
+            return Err(ConfigError::invalid(
+                &haply,
+                "rate",
+                self.haply.rate,
+                "must be <= 10000 Hz",
+            ));
+        }
+        ConfigError::positive(&haply, "connect_timeout", self.haply.connect_timeout)?;
+        ConfigError::positive(&haply, "reply_timeout", self.haply.reply_timeout)?;
+        if let Some(url) = &self.haply.url {
+            if !(url.starts_with("ws://") || url.starts_with("wss://")) {
+                return Err(ConfigError::invalid(
+                    &haply,
+                    "url",
+                    url,
+                    "must be a WebSocket address ws://HOST:PORT",
+                ));
+            }
         }
         Ok(())
     }

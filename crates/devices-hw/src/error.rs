@@ -52,6 +52,28 @@ pub enum DeviceError {
         /// The SDK's error text.
         detail: String,
     },
+    /// A device service (Haply's Inverse Service) did not answer.
+    #[error("{backend}: cannot reach the {service} at {url} ({detail}); start it, or set {env_var} to its WebSocket address (ws://HOST:PORT)")]
+    ServiceUnreachable {
+        /// The backend.
+        backend: DeviceKind,
+        /// The service's name.
+        service: &'static str,
+        /// The address tried.
+        url: String,
+        /// The environment variable that overrides the address.
+        env_var: &'static str,
+        /// Why it failed.
+        detail: String,
+    },
+    /// This build left the backend out (a cargo feature).
+    #[error("{backend}: this echothigh was built without the `{feature}` cargo feature; rebuild with `--features {feature}` (it is on by default)")]
+    NotBuilt {
+        /// The backend.
+        backend: DeviceKind,
+        /// The cargo feature that builds it.
+        feature: &'static str,
+    },
     /// A configuration value is out of range.
     #[error(transparent)]
     Config(#[from] ConfigError),

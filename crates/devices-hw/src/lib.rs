@@ -5,7 +5,10 @@
 //! - [`openhaptics`]: 3D Systems Touch / Touch X / PHANTOM Premium through the
 //!   OpenHaptics HD API (`libHD`, override with `ECHOTHIGH_HD_LIB`);
 //! - [`forcedimension`]: Force Dimension delta / omega / sigma and the Novint
-//!   Falcon through the DHD API (`libdhd`, override with `ECHOTHIGH_DHD_LIB`).
+//!   Falcon through the DHD API (`libdhd`, override with `ECHOTHIGH_DHD_LIB`);
+//! - [`haply`] (cargo feature `haply`, on by default): Haply Inverse3 with a
+//!   VerseGrip through Haply's local Inverse Service over a WebSocket
+//!   (override the address with `ECHOTHIGH_HAPLY_URL`).
 //!
 //! Every backend is a [`HardwareDevice`]: the SDK's servo thread exchanges
 //! with the 1 kHz tick through wait-free triple buffers ([`servo`]), so that
@@ -31,6 +34,8 @@ pub mod calibration;
 pub mod config;
 mod error;
 pub mod forcedimension;
+#[cfg(feature = "haply")]
+pub mod haply;
 mod hardware;
 pub mod landmarks;
 pub mod library;
@@ -41,7 +46,8 @@ pub mod servo;
 
 pub use calibration::{fit_landmarks, CalibrationError, DeviceToLeg, LandmarkFit};
 pub use config::{
-    DeviceKind, ForceDimensionConfig, HardwareConfig, OpenHapticsConfig, UnknownDeviceKind,
+    DeviceKind, ForceDimensionConfig, HaplyConfig, HardwareConfig, OpenHapticsConfig,
+    UnknownDeviceKind,
 };
 pub use error::DeviceError;
 pub use hardware::{Backend, DeviceInfo, HardwareDevice};
@@ -62,6 +68,13 @@ pub fn open_hardware(
     match kind {
         DeviceKind::Openhaptics => openhaptics::open(config),
         DeviceKind::Forcedimension => forcedimension::open(config),
+        #[cfg(feature = "haply")]
+        DeviceKind::Haply => haply::open(config),
+        #[cfg(not(feature = "haply"))]
+        DeviceKind::Haply => Err(DeviceError::NotBuilt {
+            backend: kind,
+            feature: "haply",
+        }),
     }
 }
 

@@ -12,15 +12,18 @@ pub struct BackendReport {
     pub backend: DeviceKind,
     /// The SDK it needs.
     pub sdk: &'static str,
-    /// The library file looked for (after the environment variable and the configuration).
+    /// The library file looked for (after the environment variable and the
+    /// configuration); for a service-based backend, the service's address.
     pub library: String,
-    /// The environment variable that overrides the library's path.
+    /// The environment variable that overrides the library's path (or the service's address).
     pub env_var: &'static str,
     /// Its value, when set.
     pub env_value: Option<String>,
-    /// Whether the library loaded with every function the backend calls.
+    /// Whether the library loaded with every function the backend calls
+    /// (for `haply`: whether this build has the backend's client).
     pub found: bool,
-    /// Whether a local service is reachable: `None` for these SDKs, which need no service.
+    /// Whether a local service is reachable: `None` for the SDKs that need
+    /// none (HD, DHD); for `haply`, whether the Inverse Service answered.
     pub service_reachable: Option<bool>,
     /// Devices found, with model, workspace and limits.
     pub devices: Vec<DeviceInfo>,
@@ -41,6 +44,7 @@ pub fn probe(kind: DeviceKind, config: &HardwareConfig) -> BackendReport {
             crate::forcedimension::library_spec(),
             config.forcedimension.library.as_ref(),
         ),
+        DeviceKind::Haply => return probe_haply(config),
     };
     let library = spec.resolve(configured);
     let mut report = BackendReport {
@@ -68,6 +72,57 @@ pub fn probe(kind: DeviceKind, config: &HardwareConfig) -> BackendReport {
         }
     }
     report
+}
+
+/// Probes the Haply backend: connects to the Inverse Service, reads its
+/// inventory and, when it lists an Inverse3, opens it briefly (zero force)
+/// for its description.
+#[cfg(feature = "haply")]
+fn probe_haply(config: &HardwareConfig) -> BackendReport {
+    use crate::haply;
+    let mut report = BackendReport {
+        backend: DeviceKind::Haply,
+        sdk: haply::SERVICE,
+        library: haply::resolve_url(config),
+        env_var: haply::ENV_VAR,
+        env_value: std::env::var(haply::ENV_VAR).ok(),
+        found: true,
+        service_reachable: Some(false),
+        devices: Vec::new(),
+        reason: None,
+    };
+    if let Err(e) = haply::inventory(config) {
+        report.reason = Some(e.to_string());
+        return report;
+    }
+    report.service_reachable = Some(true);
+    match open_hardware(DeviceKind::Haply, config) {
+        Ok(device) => report.devices.push(device.info().clone()),
+        Err(e) => report.reason = Some(e.to_string()),
+    }
+    report
+}
+
+/// Without the `haply` feature: the backend is reported absent, saying why.
+#[cfg(not(feature = "haply"))]
+fn probe_haply(_config: &HardwareConfig) -> BackendReport {
+    BackendReport {
+        backend: DeviceKind::Haply,
+        sdk: "Haply Inverse Service",
+        library: "ws://localhost:10001".into(),
+        env_var: "ECHOTHIGH_HAPLY_URL",
+        env_value: std::env::var("ECHOTHIGH_HAPLY_URL").ok(),
+        found: false,
+        service_reachable: None,
+        devices: Vec::new(),
+        reason: Some(
+            DeviceError::NotBuilt {
+                backend: DeviceKind::Haply,
+                feature: "haply",
+            }
+            .to_string(),
+        ),
+    }
 }
 
 /// Probes every backend, in [`DeviceKind::ALL`] order.

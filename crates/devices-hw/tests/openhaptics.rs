@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{norm, run_paced, serial, settled_medians, Emu};
+use common::{norm, run_paced, serial, settled_medians, tick_until, Emu};
 use echothigh_device::HapticDevice;
 use echothigh_devices_hw::{
     open_device, open_hardware, probe, DeviceError, DeviceKind, DeviceToLeg, HardwareConfig, Vec3,
@@ -209,10 +209,15 @@ fn stalled_tick_zeroes_force_and_drop_leaves_zero() {
     let mut dev = open_hardware(KIND, &HardwareConfig::default()).unwrap();
     let timeout = HardwareConfig::default().watchdog_timeout;
     emu.set_hand(Some([0.0, -15.0, 0.0]), 200.0, 5.0);
-    run_paced(&mut dev, 700, |_, d| {
-        Vec3::new(0.0, 200.0 * (0.09 - d.position().y).max(0.0), 0.0)
-    });
-    assert!(norm(emu.applied_force()) > 0.3, "{:?}", emu.applied_force());
+    let wall = |d: &dyn HapticDevice| Vec3::new(0.0, 200.0 * (0.09 - d.position().y).max(0.0), 0.0);
+    run_paced(&mut dev, 700, |_, d| wall(d));
+    // Rendering (checked while ticking: an OS stall of this thread beyond
+    // the 10 ms watchdog zeroes the force until the next tick).
+    assert!(
+        tick_until(&mut dev, 2000, wall, |_| norm(emu.applied_force()) > 0.3),
+        "{:?}",
+        emu.applied_force()
+    );
     // Stall the tick for 50 ms; watch the motors.
     let stall = std::time::Instant::now();
     let mut zero_after = None;
@@ -230,10 +235,10 @@ fn stalled_tick_zeroes_force_and_drop_leaves_zero() {
     );
     assert!(dev.watchdog_trips() > 0);
     // Ticking again renders force again.
-    run_paced(&mut dev, 50, |_, d| {
-        Vec3::new(0.0, 200.0 * (0.09 - d.position().y).max(0.0), 0.0)
-    });
-    assert!(norm(emu.applied_force()) > 0.3);
+    run_paced(&mut dev, 50, |_, d| wall(d));
+    assert!(tick_until(&mut dev, 2000, wall, |_| norm(
+        emu.applied_force()
+    ) > 0.3));
     drop(dev);
     assert_eq!(emu.applied_force(), [0.0; 3]);
     assert_eq!(
@@ -280,22 +285,31 @@ fn unplugged_device_faults_cleanly_and_clutch_reengages_without_a_jump() {
     assert_eq!(dev.force(), Vec3::zeros());
     assert_eq!(dev.position(), before);
     emu.set_buttons(0);
-    run_paced(&mut dev, 5, |_, _| Vec3::new(0.0, 0.2, 0.0));
-    assert!(!dev.clutched());
+    // The first tick that sees the release (the servo thread publishes it
+    // within a servo period, later on a loaded machine).
+    let push = |_: &dyn HapticDevice| Vec3::new(0.0, 0.2, 0.0);
+    assert!(tick_until(&mut dev, 2000, push, |d| !d.clutched()));
     // Re-engaged where it was held: the hand rests (it settled 0.4 s ago), so
-    // 1e-6 m bounds its motion over the 5 ms since.
+    // 1e-6 m bounds its motion since.
     assert!(
         (dev.position() - before).norm() < 1e-6,
         "{:?}",
         dev.position() - before
     );
     assert!(
-        dev.ramp_gain() <= 0.01 + 1e-12,
-        "ramp restarted: 5 ms of 0.5 s"
+        dev.ramp_gain() <= 0.002 + 1e-12,
+        "ramp restarted: at most 1 ms of 0.5 s"
     );
+    run_paced(&mut dev, 4, |_, d| push(d));
     // The device disappears: the fault latches, the force goes to zero, the pose holds.
     emu.unplug();
-    run_paced(&mut dev, 20, |_, _| Vec3::new(0.0, 0.2, 0.0));
+    // Latched within a servo period, later on a loaded machine.
+    for _ in 0..2000 {
+        if dev.fault().is_some() {
+            break;
+        }
+        run_paced(&mut dev, 1, |_, d| push(d));
+    }
     assert!(dev.fault().is_some());
     let held = dev.position();
     run_paced(&mut dev, 5, |_, _| Vec3::new(0.0, 0.2, 0.0));

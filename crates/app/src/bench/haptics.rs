@@ -30,10 +30,41 @@ pub struct Args {
     /// Number of individually timed model-manager updates.
     #[arg(long, default_value_t = 20_000)]
     fits: usize,
+    /// Instead: time the tick through this device (`openhaptics`,
+    /// `forcedimension`, `haply`; point it at an emulator with
+    /// ECHOTHIGH_HD_LIB / ECHOTHIGH_DHD_LIB / ECHOTHIGH_HAPLY_URL) beside
+    /// the simulated device, `--device-ticks` paced ticks each.
+    #[command(flatten)]
+    device: crate::cmd::device_arg::DeviceArgs,
+    /// Paced 1 kHz ticks per device with `--device`.
+    #[arg(long, default_value_t = 5000)]
+    device_ticks: usize,
 }
 
 /// Runs the benchmark and prints/writes its report.
 pub fn run(args: Args) -> anyhow::Result<()> {
+    if let Some(choice) = args.device.device {
+        let real = args
+            .device
+            .open(echothigh_device::DeviceKindSetting::Simulated)?;
+        let Some(mut real) = real else {
+            anyhow::bail!("--device {choice:?}: name a real device (openhaptics, forcedimension, haply) to compare with the simulated one");
+        };
+        let name = format!("{choice:?}").to_lowercase();
+        let results = super::device_tick::compare(&name, &mut *real, args.device_ticks)?;
+        drop(real);
+        let json = serde_json::json!({
+            "bench": "haptics-device",
+            "profile": if cfg!(debug_assertions) { "debug" } else { "release" },
+            "results": results,
+        });
+        let text = serde_json::to_string_pretty(&json)?;
+        if let Some(path) = &args.out {
+            std::fs::write(path, &text).with_context(|| format!("writing {}", path.display()))?;
+        }
+        println!("{text}");
+        return Ok(());
+    }
     let opts = BenchOptions {
         ticks: args.ticks,
         fits: args.fits,

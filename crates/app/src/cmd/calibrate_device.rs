@@ -2,12 +2,11 @@
 //! leg by touching landmarks (`echothigh_devices_hw::landmarks`), and
 //! writes the result as a `--hardware` file for `run` and `haptic-client`.
 
-use super::device_arg::{DeviceArg, DeviceArgs};
+use super::device_arg::DeviceArgs;
 use super::run::load_scenario;
 use anyhow::{bail, Context, Result};
 use echothigh_devices_hw::{
-    capture_landmarks, open_hardware, CaptureConfig, CaptureEvent, DeviceKind, HardwareConfig,
-    Landmark, Vec3,
+    capture_landmarks, open_hardware, CaptureConfig, CaptureEvent, HardwareConfig, Landmark, Vec3,
 };
 use echothigh_model::{LegSurface, ThighGeometry};
 use echothigh_runtime::signals::stop_on_signals;
@@ -78,12 +77,8 @@ pub fn thigh_landmarks(thigh: &ThighGeometry) -> Result<Vec<Landmark>> {
 
 /// Runs the calibration.
 pub fn run(args: Args) -> Result<()> {
-    let kind = match args.device.device {
-        DeviceArg::Simulated => {
-            bail!("calibrate needs a real device: --device openhaptics|forcedimension")
-        }
-        DeviceArg::Openhaptics => DeviceKind::Openhaptics,
-        DeviceArg::Forcedimension => DeviceKind::Forcedimension,
+    let Some(kind) = args.device.device.and_then(|d| d.kind()) else {
+        bail!("calibrate needs a real device: --device openhaptics|forcedimension|haply")
     };
     if args.out.exists() {
         bail!(

@@ -4,7 +4,7 @@
 //! time (`echothigh devices` lists what this machine has).
 
 use anyhow::{Context, Result};
-use echothigh_device::HapticDevice;
+use echothigh_device::{DeviceKindSetting, HapticDevice};
 use echothigh_devices_hw::{open_device, DeviceKind, HardwareConfig};
 use std::path::PathBuf;
 
@@ -20,37 +20,73 @@ pub enum DeviceArg {
     /// Force Dimension delta / omega / sigma, Novint Falcon (DHD, `libdhd`;
     /// override the path with ECHOTHIGH_DHD_LIB).
     Forcedimension,
+    /// Haply Inverse3 with a VerseGrip, through Haply's Inverse Service
+    /// (default ws://localhost:10001; override with ECHOTHIGH_HAPLY_URL).
+    Haply,
+}
+
+impl DeviceArg {
+    /// The real-device backend, `None` for the simulated device.
+    pub fn kind(self) -> Option<DeviceKind> {
+        match self {
+            DeviceArg::Simulated => None,
+            DeviceArg::Openhaptics => Some(DeviceKind::Openhaptics),
+            DeviceArg::Forcedimension => Some(DeviceKind::Forcedimension),
+            DeviceArg::Haply => Some(DeviceKind::Haply),
+        }
+    }
 }
 
 /// The device options shared by the commands that run the haptic loop.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub struct DeviceArgs {
-    /// Haptic device the loop drives: `simulated` (default) or a real one;
-    /// with a real device a person's hand replaces the exam script.
-    #[arg(long, value_enum, default_value_t)]
-    pub device: DeviceArg,
+    /// Haptic device the loop drives: `simulated` or a real one; with a
+    /// real device a person's hand replaces the exam script. Default: the
+    /// scenario's `[device] kind` (itself `simulated` by default).
+    #[arg(long, value_enum)]
+    pub device: Option<DeviceArg>,
     /// The real device's settings, a TOML file of `[device.hardware]` keys
     /// (calibration, ramp_time, watchdog_timeout, clutch_button,
-    /// thermal_time_constant, [openhaptics], [forcedimension]); defaults
+    /// thermal_time_constant, [openhaptics], [forcedimension], [haply]); defaults
     /// otherwise.
     #[arg(long)]
     pub hardware: Option<PathBuf>,
 }
 
+impl DeviceArg {
+    /// The device a scenario's `[device] kind` names.
+    pub fn from_setting(setting: DeviceKindSetting) -> DeviceArg {
+        match setting {
+            DeviceKindSetting::Simulated => DeviceArg::Simulated,
+            DeviceKindSetting::Openhaptics => DeviceArg::Openhaptics,
+            DeviceKindSetting::Forcedimension => DeviceArg::Forcedimension,
+            DeviceKindSetting::Haply => DeviceArg::Haply,
+        }
+    }
+}
+
 impl DeviceArgs {
-    /// Opens the real device asked for (`None` for `simulated`). A missing
-    /// library, no device or a bad settings file is an error naming the
-    /// file, the library and the variable that overrides its path.
-    pub fn open(&self) -> Result<Option<Box<dyn HapticDevice + Send>>> {
-        let kind = match self.device {
-            DeviceArg::Simulated if self.hardware.is_some() => {
+    /// The device to drive: `--device` if given, else the scenario's `[device] kind`.
+    pub fn chosen(&self, scenario: DeviceKindSetting) -> DeviceArg {
+        self.device
+            .unwrap_or_else(|| DeviceArg::from_setting(scenario))
+    }
+
+    /// Opens the real device chosen (`None` for `simulated`; `scenario` is
+    /// the scenario's `[device] kind`). A missing library, an unreachable
+    /// service, no device or a bad settings file is an error naming the
+    /// file, the library or address, and the variable that overrides it.
+    pub fn open(
+        &self,
+        scenario: DeviceKindSetting,
+    ) -> Result<Option<Box<dyn HapticDevice + Send>>> {
+        let Some(kind) = self.chosen(scenario).kind() else {
+            if self.hardware.is_some() {
                 anyhow::bail!(
-                    "--hardware applies to a real device: add --device openhaptics|forcedimension"
-                )
+                    "--hardware applies to a real device: add --device openhaptics|forcedimension|haply"
+                );
             }
-            DeviceArg::Simulated => return Ok(None),
-            DeviceArg::Openhaptics => DeviceKind::Openhaptics,
-            DeviceArg::Forcedimension => DeviceKind::Forcedimension,
+            return Ok(None);
         };
         let config = match &self.hardware {
             None => HardwareConfig::default(),

@@ -56,13 +56,21 @@ fn print_text(r: &BackendReport) {
     };
     let state = if !r.devices.is_empty() {
         "ready"
+    } else if r.service_reachable == Some(false) {
+        "service unreachable"
+    } else if r.service_reachable == Some(true) {
+        "service reachable, no device"
     } else if r.found {
         "library found, no device"
     } else {
         "absent"
     };
     println!("{} ({}): {state}", r.backend, r.sdk);
-    println!("  library: {} ({env})", r.library);
+    if r.service_reachable.is_some() {
+        println!("  service: {} ({env})", r.library);
+    } else {
+        println!("  library: {} ({env})", r.library);
+    }
     for d in &r.devices {
         let l = &d.limits;
         println!(

@@ -263,7 +263,7 @@ pub fn client(args: ClientArgs) -> Result<()> {
     };
     let connect_timeout = timeout_arg("--connect-timeout", args.connect_timeout)?;
     // The device first: a missing driver is said before any file is made.
-    let real = args.device.open()?;
+    let real = args.device.open(scenario.device.kind)?;
     let dir = args.out.clone().unwrap_or_else(|| default_out("client"));
     let stop = stop_on_signals()?;
     // The directory, its free space and its files before connecting.

@@ -181,14 +181,15 @@ fn verdict(dir: &Path, s: &Summary) -> Result<()> {
 /// Runs the command.
 pub fn run(args: Args) -> Result<()> {
     let scenario = load_scenario(args.scenario.as_deref(), args.mode, args.duration)?;
-    if args.deployment == Deployment::Virtual && args.device.device != DeviceArg::Simulated {
+    let chosen = args.device.chosen(scenario.device.kind);
+    if args.deployment == Deployment::Virtual && chosen != DeviceArg::Simulated {
         anyhow::bail!(
-            "--device {:?} needs a real-time run: drop --deployment virtual",
-            args.device.device
+            "device {:?} (from --device or the scenario's [device] kind) needs a real-time run: drop --deployment virtual",
+            chosen
         );
     }
     // The device first: a missing driver is said before any file is made.
-    let device = args.device.open()?;
+    let device = args.device.open(scenario.device.kind)?;
     let dir = args.out.clone().unwrap_or_else(|| default_out("run"));
     let stop = stop_on_signals()?;
     let d = scenario.run.duration;

@@ -160,3 +160,23 @@ pub fn settled_medians(
     };
     (median(&mut ys), median(&mut fs))
 }
+
+/// Runs paced ticks with `force` until `done(device)` holds, at most
+/// `max_ticks`; returns whether it held. For conditions that a loaded
+/// machine only delays (the servo thread not scheduled for a few ms, or an
+/// OS stall of the tick beyond the watchdog zeroing the force for a moment):
+/// the condition asserted is the same, only the moment it is checked waits.
+pub fn tick_until(
+    device: &mut dyn HapticDevice,
+    max_ticks: usize,
+    mut force: impl FnMut(&dyn HapticDevice) -> echothigh_devices_hw::Vec3,
+    mut done: impl FnMut(&dyn HapticDevice) -> bool,
+) -> bool {
+    for _ in 0..max_ticks {
+        if done(&*device) {
+            return true;
+        }
+        run_paced(device, 1, |_, d| force(d));
+    }
+    done(&*device)
+}
