@@ -89,8 +89,10 @@ const findThigh = () => {
 const THROTTLE = 2;
 
 /**
- * Runs in the page: `n` presses alternating between 10 and 14 mm at (theta,
- * z); for each, the time from sending it to the first state whose physics
+ * Runs in the page: `n` presses alternating between 8 and 16 mm at (theta,
+ * z) (the default leg is softer than the former cylinder: between 10 and
+ * 14 mm its force moves ~1 N, so a 0.5 N move from a force still settling
+ * was missed once in 50; 8 to 16 mm doubles the swing); for each, the time from sending it to the first state whose physics
  * force moved 0.5 N its way, and to the first image showing a physics state
  * at least that recent. Also the page's frame intervals and bytes received.
  */
@@ -100,7 +102,7 @@ const measureLag = async ({ n, theta, z, throttle }) => {
   const force = (s) => Math.hypot(...s.physics_force);
   const send = (depth) => L.send({ type: 'probe', theta, z, depth, tilt: 0 });
   const pause = (ms) => new Promise((r) => setTimeout(r, ms));
-  send(0.010);
+  send(0.008);
   await pause(1500);
   const frames = [];
   let last = performance.now();
@@ -117,7 +119,7 @@ const measureLag = async ({ n, theta, z, throttle }) => {
   const misses = []; // what a command without its effect left, for the JSON
   let missed = 0;
   for (let i = 0; i < n; i++) {
-    const depth = i % 2 === 0 ? 0.014 : 0.010;
+    const depth = i % 2 === 0 ? 0.016 : 0.008;
     const f0 = force(L.state);
     const up = depth > 0.012;
     const r = await new Promise((resolve) => {
