@@ -85,6 +85,25 @@ const findThigh = () => {
   return best;
 };
 
+/**
+ * At most this many stale images (showing a physics state older than the
+ * one whose effect the page's state already shows) reach the page before
+ * the image shows the effect, when nothing queues. The server sends an image
+ * only once the page has shown the previous one (image_ack), always the
+ * newest complete render, and never the same render twice (frames.rs); the
+ * imaging thread renders from the newest physics state. So when the state
+ * showing the effect arrives, what can still come first is: (1) the image
+ * already in flight; (2) the newest complete render when that one is
+ * acknowledged, which may predate the effect; (3) the render that was in
+ * progress when the effect reached the physics, sent at the next
+ * acknowledgement. The render after that starts from a state at least as
+ * recent. A backlog of stale frames, as in issue 19 (4–27 s of frames),
+ * puts tens of stale images there. This count does not depend on how slowly
+ * the machine runs, unlike a time bound: on CI's two loaded cores one image
+ * in 50 took 3.2 s (the image interval's p95 was 1.7 s) with no backlog.
+ */
+const MAX_STALE_IMAGES = 3;
+
 /** CPU throttling of the page during the lag measurement (CDP rate: ×2 slower). */
 const THROTTLE = 2;
 
@@ -94,11 +113,18 @@ const THROTTLE = 2;
  * 14 mm its force moves ~1 N, so a 0.5 N move from a force still settling
  * was missed once in 50; 8 to 16 mm doubles the swing); for each, the time from sending it to the first state whose physics
  * force moved 0.5 N its way, and to the first image showing a physics state
- * at least that recent. Also the page's frame intervals and bytes received.
+ * at least that recent, with the number of stale images (showing an older
+ * state) that reached the page in between. Also the page's frame intervals
+ * and bytes received.
  */
-const measureLag = async ({ n, theta, z, throttle }) => {
+const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
+  const MAX_STALE_IMAGES = maxStale; // the module's constant, passed into the page
   const L = window.echothigh;
-  const TIMEOUT = 3000; // ms
+  const TIMEOUT = 3000; // ms, for the state; a miss is counted as this long
+  // Once the state shows the effect, how long to wait for the image before
+  // giving up on it (it only stops a stuck stream from hanging the test; the
+  // image's criterion is the count of stale images, see the checks).
+  const IMAGE_WAIT = 10000; // ms
   const force = (s) => Math.hypot(...s.physics_force);
   const send = (depth) => L.send({ type: 'probe', theta, z, depth, tilt: 0 });
   const pause = (ms) => new Promise((r) => setTimeout(r, ms));
@@ -115,7 +141,7 @@ const measureLag = async ({ n, theta, z, throttle }) => {
   const imageAt = [];
   const onImage = (kind, now) => { if (kind === 'image') imageAt.push(now); };
   L.listeners.push(onImage);
-  const state = [], image = [];
+  const state = [], image = [], stale = [];
   const misses = []; // what a command without its effect left, for the JSON
   let missed = 0;
   for (let i = 0; i < n; i++) {
@@ -123,23 +149,33 @@ const measureLag = async ({ n, theta, z, throttle }) => {
     const f0 = force(L.state);
     const up = depth > 0.012;
     const r = await new Promise((resolve) => {
-      let at = null, simTime = null;
+      let at = null, simTime = null, staleImages = 0;
       const t0 = performance.now();
+      let timer = null;
       const fn = (kind, now, d) => {
         if (kind === 'state' && at === null) {
           const f = force(d);
-          if (up ? f > f0 + 0.5 : f < f0 - 0.5) { at = now; simTime = d.time; }
-        } else if (kind === 'image' && at !== null && d !== null && d >= simTime) {
-          done({ state: at - t0, image: now - t0 });
+          if (up ? f > f0 + 0.5 : f < f0 - 0.5) {
+            at = now; simTime = d.time;
+            clearTimeout(timer);
+            timer = setTimeout(() => done(null), IMAGE_WAIT);
+          }
+        } else if (kind === 'image' && at !== null && d !== null) {
+          if (d >= simTime) done({ state: at - t0, image: now - t0, stale: staleImages });
+          else staleImages++;
         }
       };
-      const timer = setTimeout(() => done(null), TIMEOUT);
-      function done(v) { if (!v) misses.push({ i, effect_seen: at !== null, sim_time: simTime, image_time: L.imageTime, f0, f: force(L.state), last_error: L.lastError, observer: L.state.observer }); clearTimeout(timer); L.listeners.splice(L.listeners.indexOf(fn), 1); resolve(v); }
+      timer = setTimeout(() => done(null), TIMEOUT);
+      function done(v) {
+        if (!v || v.stale > MAX_STALE_IMAGES) misses.push({ i, effect_seen: at !== null, stale_images: staleImages, sim_time: simTime, image_time: L.imageTime, f0, f: force(L.state), last_error: L.lastError, observer: L.state.observer });
+        clearTimeout(timer); L.listeners.splice(L.listeners.indexOf(fn), 1); resolve(v);
+      }
       L.listeners.push(fn);
       send(depth);
     });
     // A command without its effect within the timeout counts as that long.
-    if (r) { state.push(r.state); image.push(r.image); } else { missed++; state.push(TIMEOUT); image.push(TIMEOUT); }
+    if (r) { state.push(r.state); image.push(r.image); stale.push(r.stale); if (r.stale > MAX_STALE_IMAGES) missed++; }
+    else { missed++; state.push(TIMEOUT); image.push(TIMEOUT + IMAGE_WAIT); }
     await pause(400); // let the tissue settle before the next press
   }
   run = false;
@@ -151,6 +187,7 @@ const measureLag = async ({ n, theta, z, throttle }) => {
     commands: n, missed, throttle, viewport: [innerWidth, innerHeight],
     state: { p50: q(state, 0.5), p95: q(state, 0.95), max: q(state, 1) },
     image: { p50: q(image, 0.5), p95: q(image, 0.95), max: q(image, 1) },
+    stale_images: { p50: q(stale, 0.5), max: q(stale, 1) },
     frame_p95: q(frames, 0.95), frames: frames.length,
     image_interval_p95: q(imageIntervals, 0.95), images: imageAt.length,
     bytes_per_s: (L.bytes - bytes0) / secs, seconds: secs, misses: misses.slice(0, 10),
@@ -345,11 +382,11 @@ try {
   const cdp = await page.context().newCDPSession(page);
   await cdp.send('Emulation.setCPUThrottlingRate', { rate: THROTTLE });
   await page.waitForTimeout(1000);
-  const lag = await page.evaluate(measureLag, { n: 50, theta: start.hit.theta, z: start.hit.z, throttle: THROTTLE });
+  const lag = await page.evaluate(measureLag, { n: 50, theta: start.hit.theta, z: start.hit.z, throttle: THROTTLE, maxStale: MAX_STALE_IMAGES });
   await cdp.send('Emulation.setCPUThrottlingRate', { rate: 1 });
   writeFileSync(join(shots, 'viewer-lag.json'), JSON.stringify(lag, null, 2));
   const ms = (x) => (x === null ? 'n/a' : `${x.toFixed(0)} ms`);
-  console.log(`info lag over ${lag.commands} commands (${lag.missed} without effect within 3 s, counted as 3 s): state p50 ${ms(lag.state.p50)} p95 ${ms(lag.state.p95)}, ` +
+  console.log(`info lag over ${lag.commands} commands (${lag.missed} missed: no state effect within 3 s, counted as 3 s, or more than ${MAX_STALE_IMAGES} stale images first; stale images p50 ${lag.stale_images.p50} max ${lag.stale_images.max}): state p50 ${ms(lag.state.p50)} p95 ${ms(lag.state.p95)}, ` +
     `image p50 ${ms(lag.image.p50)} p95 ${ms(lag.image.p95)}; page frames p95 ${ms(lag.frame_p95)}; ${(lag.bytes_per_s / 1000).toFixed(0)} KB/s (${join(shots, 'viewer-lag.json')})`);
   // The wire's budget is 360 KB/s of payload by construction (the server's
   // token bucket, frames.rs), so 400 KB/s holds whatever the machine's load.
@@ -376,10 +413,11 @@ try {
   const keepsUp = lag.physics_rate >= 0.8 * lag.physics_rate_setting;
   const bound = 150 + 2 * lag.frame_p95;
   // What is asserted: no backlog. Every one of the 50 commands showed its
-  // effect in the state and in the image within 3 s (before flow control,
-  // issue 19 measured 4–6 s at 1280×800, so every command would miss).
-  check('every command reaches the state and the image within 3 s (no backlog)', lag.missed === 0,
-    `${lag.missed} of ${lag.commands} missed`);
+  // effect in the state within 3 s (before flow control, issue 19 measured
+  // 4–6 s at 1280×800, so every command would miss), and in the image after
+  // at most MAX_STALE_IMAGES stale images (derived above).
+  check(`every command reaches the state within 3 s and the image after at most ${MAX_STALE_IMAGES} stale images (no backlog)`, lag.missed === 0,
+    `${lag.missed} of ${lag.commands} missed: ${JSON.stringify(lag.misses)}`);
   // Reported, not asserted: the frame-interval bounds above are not yet
   // derived well enough to hold (on an idle machine the state's p95 was
   // 538 ms against 150 + 2 × 183 ms = 517 ms; the physics' own response to
