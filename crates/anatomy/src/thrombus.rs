@@ -230,8 +230,17 @@ impl ThrombusSpec {
             lo * 1e3,
             hi * 1e3
         );
-        let s_start = check(key, "s_start", self.s_start, lo, hi, &span)?;
-        let s_end = check(key, "s_end", self.s_end, lo, hi, &span)?;
+        // Ends written to 0.1 mm at a vein's end (e.g. 0.2667 for a hiatus
+        // at 0.26666…) are taken as that end.
+        let near = |v: f64| {
+            if (lo - 1e-4..=hi + 1e-4).contains(&v) {
+                v.clamp(lo, hi)
+            } else {
+                v
+            }
+        };
+        let s_start = check(key, "s_start", near(self.s_start), lo, hi, &span)?;
+        let s_end = check(key, "s_end", near(self.s_end), lo, hi, &span)?;
         let transition = check(
             key,
             "transition",
