@@ -159,6 +159,7 @@ fn extra_structures(
                 radii: e.radii,
                 angle: e.angle,
                 wall,
+                condition: None,
             };
             st.validate("imaging.anatomy.structure").ok().map(|_| st)
         })
