@@ -5,7 +5,7 @@
 
 use crate::cmd::anatomy::load_patient;
 use anyhow::{bail, Context, Result};
-use echothigh_anatomy::{Anatomy, ProbePose, Site};
+use echothigh_anatomy::{Anatomy, ProbePose, Site, Thrombi};
 use echothigh_imaging::AnatomyConfig;
 
 /// Where the probe is on the leg: a patient and a level (or a site).
@@ -28,6 +28,16 @@ pub fn place(
 ) -> Result<Placement> {
     let p = load_patient(patient)?;
     let anatomy = Anatomy::new(p).with_context(|| format!("patient {patient}"))?;
+    place_on(anatomy, at_mm, angle_deg, site)
+}
+
+/// As [`place`] on an already built anatomy (a case's, `--case`).
+pub fn place_on(
+    anatomy: Anatomy,
+    at_mm: Option<f64>,
+    angle_deg: Option<f64>,
+    site: Option<&str>,
+) -> Result<Placement> {
     let pose = match (site, at_mm) {
         (Some(_), Some(_)) => bail!("give either --site or --at, not both"),
         (Some(name), None) => {
@@ -46,7 +56,7 @@ pub fn place(
                 None => anatomy.pose_over(s, anatomy.deep_vein_at(s))?,
             }
         }
-        (None, None) => bail!("--patient needs --at or --site"),
+        (None, None) => bail!("--patient and --case need --at or --site"),
     };
     Ok(Placement { anatomy, pose })
 }
@@ -56,4 +66,19 @@ pub fn place(
 /// [`echothigh_runtime::section_image::section_anatomy`]).
 pub fn section_anatomy(base: &AnatomyConfig, placement: &Placement) -> Result<AnatomyConfig> {
     echothigh_runtime::section_image::section_anatomy(base, &placement.anatomy, &placement.pose)
+}
+
+/// As [`section_anatomy`], each vein with its condition from `thrombi`
+/// (a case's segments, `--case`) at the section.
+pub fn case_section_anatomy(
+    base: &AnatomyConfig,
+    placement: &Placement,
+    thrombi: &Thrombi,
+) -> Result<AnatomyConfig> {
+    echothigh_runtime::section_image::section_anatomy_with(
+        base,
+        &placement.anatomy,
+        &placement.pose,
+        Some(thrombi),
+    )
 }

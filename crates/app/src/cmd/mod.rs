@@ -2,6 +2,7 @@
 
 pub mod anatomy;
 pub mod calibrate;
+pub mod cases;
 pub mod calibrate_device;
 pub mod device_arg;
 pub mod devices;
