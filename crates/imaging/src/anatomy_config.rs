@@ -557,20 +557,30 @@ impl AnatomyConfig {
         self.chronic.validate(&format!("{p}.chronic"))?;
         if let Some(vc) = &self.vein_condition {
             vc.validate(&format!("{p}.vein_condition"))?;
+            // A distended vein may bulge into the fat (lumens are drawn
+            // first), but must stay under the skin and above the femur.
+            let r = 0.5 * self.vein_diameter * vc.diameter_factor + vc.wall_thickness;
+            if !(self.vein_depth - r > self.skin_thickness
+                && self.vein_depth + r < self.femur_top())
+            {
+                return Err(ImagingError::invalid(
+                    p,
+                    "vein_condition.diameter_factor",
+                    vc.diameter_factor,
+                    "the vein so distended would cross the skin or the femur",
+                ));
+            }
         }
-        // Vessels (largest state or the own condition) must sit inside the muscle layer.
-        let own = self.vein_condition.iter();
+        // Vessels (largest state) must sit inside the muscle layer.
         let vein_r = 0.5
             * self.vein_diameter
             * VeinState::ALL
                 .iter()
                 .map(|&s| self.vein(s).diameter_factor)
-                .chain(own.clone().map(|c| c.diameter_factor))
                 .fold(0.0, f64::max)
             + VeinState::ALL
                 .iter()
                 .map(|&s| self.vein(s).wall_thickness)
-                .chain(own.map(|c| c.wall_thickness))
                 .fold(0.0, f64::max);
         let art_r = 0.5 * self.artery_diameter * (1.0 + self.artery_distension)
             + self.artery_wall_thickness;

@@ -87,7 +87,14 @@ fn measure(cfg: &ImagingConfig, press: &StaticPress) -> Measured {
             for i in 0..rows {
                 let d = (i as f64 + 0.5) * dz;
                 let g = img[i * cols + j] as f64;
-                let in_artery = inside(u, d, art.lateral, art.depth, art.half_width + 1e-3, art.half_height + 1e-3);
+                let in_artery = inside(
+                    u,
+                    d,
+                    art.lateral,
+                    art.depth,
+                    art.half_width + 1e-3,
+                    art.half_height + 1e-3,
+                );
                 if inside(u, d, vein.lateral, vein.depth, hw, hh) && !in_artery {
                     window.push(g);
                 } else if ((u - vein.lateral).abs() - hw - 6e-3).abs() < 2e-3
@@ -143,7 +150,10 @@ fn non_occlusive_leaves_a_residual_and_chronic_compresses_partly() {
         ("model", healthy.model, partial.model, full.model),
         ("image", healthy.image, partial.image, full.image),
     ] {
-        assert!(a < 0.10 && b > 0.20 && b < c - 0.15, "{what}: healthy {a}, partial {b}, occlusive {c}");
+        assert!(
+            a < 0.10 && b > 0.20 && b < c - 0.15,
+            "{what}: healthy {a}, partial {b}, occlusive {c}"
+        );
     }
     // fv-chronic (lean male): recanalized 0.5 over 120–240 mm: the model's
     // smallest ratio is 0.5 · 0.95 + 0.5 · 0.5 = 0.725; under the exam force

@@ -187,7 +187,11 @@ fn write(path: &Path, cfg: &ImagingConfig, frame: &[u8]) -> Result<()> {
 pub fn run(args: Args) -> Result<()> {
     let scenario = load_scenario(&args)?;
     let mut cfg = scenario.imaging_config();
-    let case = args.case.as_deref().map(super::cases::load_case).transpose()?;
+    let case = args
+        .case
+        .as_deref()
+        .map(super::cases::load_case)
+        .transpose()?;
     if case.is_some()
         || args.patient.is_some()
         || args.at.is_some()

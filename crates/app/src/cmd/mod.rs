@@ -2,8 +2,8 @@
 
 pub mod anatomy;
 pub mod calibrate;
-pub mod cases;
 pub mod calibrate_device;
+pub mod cases;
 pub mod device_arg;
 pub mod devices;
 pub mod image;
