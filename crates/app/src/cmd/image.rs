@@ -256,7 +256,7 @@ pub fn run(args: Args) -> Result<()> {
         println!(
             "{}: {} vein at {:.1} N (indentation {:.1} mm): vein lumen {:.0} % of rest, artery {:.0} %",
             args.out.display(),
-            args.vein.name(),
+            if case.is_some() { "case" } else { args.vein.name() },
             press.force,
             press.indentation * 1e3,
             vein * 100.0,
