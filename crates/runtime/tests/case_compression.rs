@@ -161,5 +161,8 @@ fn non_occlusive_leaves_a_residual_and_chronic_compresses_partly() {
     let chronic = builtin("fv-chronic").unwrap();
     let c = measure(&config(&chronic, 0.150), &p);
     assert!(c.model < 0.9 && c.model > 0.6, "chronic model {}", c.model);
+    // On the image the chronic vein only shows as not coapted: its open
+    // channels are a small part of the dark count (−14 dB content is mostly
+    // above the threshold), so partial compression is asserted on the model.
     assert!(c.image > 0.3, "chronic image {}", c.image);
 }
