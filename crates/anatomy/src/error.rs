@@ -60,4 +60,13 @@ pub enum AnatomyError {
     /// An unknown exam site name.
     #[error("unknown site `{0}` (known: cfv, sfj, fv-proximal, fv-mid, fv-distal, popliteal)")]
     UnknownSite(String),
+    /// A thrombus segment of a case is invalid; `key` names the entry and
+    /// field (`thrombus[2].s_end`).
+    #[error("{key} {reason}")]
+    Thrombus {
+        /// The key at fault, e.g. `thrombus[0].vein`.
+        key: String,
+        /// What is wrong and what it must satisfy.
+        reason: String,
+    },
 }

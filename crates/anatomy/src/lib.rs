@@ -11,6 +11,8 @@
 //! - [`Anatomy`]: queries — skin point and normal, inside-the-leg, depth of
 //!   the femur along a ray, the image plane of a probe pose, the section
 //!   (ellipses in image coordinates), the exam sites.
+//! - [`ThrombusSpec`], [`Thrombi`], [`LumenState`]: thrombus segments on
+//!   named veins (issue 13) and the state of a vein's lumen at one `s`.
 //!
 //! Units are SI (m, rad). Every anatomical number cites its source where it
 //! is defined (`patient.rs`, `levels.rs`, `vessels.rs`, `leg.rs`), or is
@@ -33,10 +35,12 @@ pub mod frame;
 pub mod interp;
 pub mod leg;
 pub mod levels;
+pub mod lumen_state;
 pub mod patient;
 pub mod section;
 pub mod structure;
 pub mod tables;
+pub mod thrombus;
 pub mod vessels;
 
 pub use anatomy::{cut_tube, Anatomy};
@@ -45,6 +49,8 @@ pub use error::AnatomyError;
 pub use frame::Vec3;
 pub use leg::LegShape;
 pub use levels::{LegLevel, Levels};
+pub use lumen_state::{Layout, LumenState, Thrombi, TruthPiece, VeinTruth};
 pub use patient::{Patient, Sex, PRESETS};
 pub use section::{ImagePlane, ProbePose, Section, SectionStructure, Site};
 pub use structure::{CrossSection, Ellipsoid, Kind, StructureId, Tube};
+pub use thrombus::{Thrombus, ThrombusKind, ThrombusSpec};

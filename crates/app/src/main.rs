@@ -40,6 +40,9 @@ enum Command {
     Experiment(echothigh_experiments::ExperimentCommand),
     /// The transverse section of the 3D leg anatomy under a probe (JSON or table).
     Anatomy(cmd::anatomy::Args),
+    /// The case library (issue 13): list, show (ground truth), generate.
+    #[command(subcommand)]
+    Cases(cmd::cases::CasesCommand),
     /// The trainee's live web viewer (3D thigh, probe, image, force, exam mode).
     #[cfg(feature = "viewer")]
     View(echothigh_viewer::Args),
@@ -67,6 +70,7 @@ fn main() -> std::process::ExitCode {
         #[cfg(feature = "viewer")]
         Command::View(a) => echothigh_viewer::run(a),
         Command::Anatomy(a) => cmd::anatomy::run(a),
+        Command::Cases(c) => cmd::cases::run(c),
         Command::Devices(a) => cmd::devices::run(a),
     };
     match result {

@@ -13,10 +13,11 @@
 //! `1 + ε P(t)`, with `P(t) = (φ/τ) e^{1 − φ/τ}`, `φ` the phase of the heart
 //! cycle and `τ` = 0.12 (a fast systolic upstroke, a slow diastolic decay).
 
-use crate::anatomy_config::{AnatomyConfig, VeinState, VeinStateParams};
+use crate::anatomy_config::{AnatomyConfig, VeinState};
 use crate::error::ImagingError;
 use crate::structure_config::StructureKind;
 use crate::tissue::Tissue;
+use crate::vein_condition::{ContentLayout, VeinCondition};
 use std::f64::consts::PI;
 
 /// Largest number of breakpoints [`Anatomy::column_breakpoints`] returns.
@@ -115,8 +116,8 @@ impl Vessel {
 /// How a vessel's lumen responds to the tissue pressure.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LumenLaw {
-    /// The vein law with these parameters.
-    Vein(VeinStateParams),
+    /// The vein law of this condition (issue 13: per vein).
+    Vein(VeinCondition),
     /// The artery law of the anatomy's configuration.
     Artery,
 }
@@ -132,12 +133,21 @@ pub struct SectionVessel {
     pub tissues: (Tissue, Tissue),
 }
 
+impl SectionVessel {
+    /// The vein's condition (`None` for an artery).
+    pub fn condition(&self) -> Option<&VeinCondition> {
+        match &self.law {
+            LumenLaw::Vein(c) => Some(c),
+            LumenLaw::Artery => None,
+        }
+    }
+}
+
 /// The section's anatomy for one vein state.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Anatomy {
     cfg: AnatomyConfig,
     state: VeinState,
-    vein_params: VeinStateParams,
     /// The studied vein (0), its artery (1), then the extra vessels.
     vessels: Vec<SectionVessel>,
     /// Muscle outlines and lymph nodes.
@@ -150,23 +160,20 @@ fn smoothstep(t: f64) -> f64 {
     t * t * (3.0 - 2.0 * t)
 }
 
-/// The vein lumen law `c(p)` of the module docs with parameters `v`.
-fn vein_law(v: &VeinStateParams, pressure: f64) -> f64 {
-    let t = (pressure - v.collapse_onset) / (v.collapse_full - v.collapse_onset);
-    1.0 - (1.0 - v.min_lumen_ratio) * smoothstep(t)
-}
-
 impl Anatomy {
     /// The anatomy of `cfg` with the vein in `state`; validates `cfg` with
-    /// the prefix `imaging.anatomy`.
+    /// the prefix `imaging.anatomy`. The studied vein's condition is
+    /// `cfg.vein_condition` when set (a case's segment state at the
+    /// section), else that of `state` (one segment along the whole vein);
+    /// each vein of `structures` has its own `condition` (healthy if none).
     pub fn new(cfg: &AnatomyConfig, state: VeinState) -> Result<Self, ImagingError> {
         cfg.validate("imaging.anatomy")?;
-        let vp = *cfg.vein(state);
+        let vc = cfg.studied_condition(state);
         let vein = Vessel::circle(
             cfg.vein_lateral,
             cfg.vein_depth,
-            0.5 * cfg.vein_diameter * vp.diameter_factor,
-            vp.wall_thickness,
+            0.5 * cfg.vein_diameter * vc.diameter_factor,
+            vc.wall_thickness,
         );
         let artery = Vessel::circle(
             cfg.artery_lateral,
@@ -177,7 +184,7 @@ impl Anatomy {
         let mut vessels = vec![
             SectionVessel {
                 vessel: vein,
-                law: LumenLaw::Vein(vp),
+                law: LumenLaw::Vein(vc),
                 tissues: (Tissue::VeinLumen, Tissue::VeinWall),
             },
             SectionVessel {
@@ -187,8 +194,9 @@ impl Anatomy {
             },
         ];
         let mut others = Vec::new();
+        let healthy = VeinCondition::of_state(VeinState::Healthy, &cfg.healthy, &cfg.healthy);
         for st in &cfg.structures {
-            let v = Vessel {
+            let mut v = Vessel {
                 lateral: st.lateral,
                 depth: st.depth,
                 radius: st.radii[0],
@@ -197,11 +205,19 @@ impl Anatomy {
                 wall: st.wall,
             };
             match st.kind {
-                StructureKind::Vein => vessels.push(SectionVessel {
-                    vessel: v,
-                    law: LumenLaw::Vein(cfg.healthy),
-                    tissues: (Tissue::Blood, Tissue::VesselWall),
-                }),
+                StructureKind::Vein => {
+                    let c = st.condition.unwrap_or(healthy);
+                    if let Some(own) = &st.condition {
+                        v.radius *= own.diameter_factor;
+                        v.radius_b *= own.diameter_factor;
+                        v.wall = own.wall_thickness;
+                    }
+                    vessels.push(SectionVessel {
+                        vessel: v,
+                        law: LumenLaw::Vein(c),
+                        tissues: (Tissue::Blood, Tissue::VesselWall),
+                    })
+                }
                 StructureKind::Artery => vessels.push(SectionVessel {
                     vessel: v,
                     law: LumenLaw::Artery,
@@ -213,7 +229,6 @@ impl Anatomy {
         Ok(Anatomy {
             cfg: cfg.clone(),
             state,
-            vein_params: vp,
             vessels,
             others,
         })
@@ -249,7 +264,7 @@ impl Anatomy {
     /// under the tissue pressure `pressure` (Pa) at it and at time `time` (s).
     pub fn lumen_ratio(&self, i: usize, pressure: f64, time: f64) -> f64 {
         match self.vessels[i].law {
-            LumenLaw::Vein(p) => vein_law(&p, pressure),
+            LumenLaw::Vein(c) => c.lumen_ratio(pressure),
             LumenLaw::Artery => self.artery_lumen_ratio(pressure, time),
         }
     }
@@ -277,29 +292,47 @@ impl Anatomy {
 
     /// The tissue at `(u, depth)` in tissue coordinates (m).
     pub fn tissue_at(&self, u: f64, depth: f64) -> Tissue {
+        self.classify(u, depth).0
+    }
+
+    /// The tissue at `(u, depth)` and, inside a vessel (lumen, content or
+    /// wall), the vessel's index in [`Anatomy::vessels`].
+    pub fn classify(&self, u: f64, depth: f64) -> (Tissue, Option<usize>) {
         let c = &self.cfg;
         if depth < 0.0 {
-            return Tissue::Gel;
+            return (Tissue::Gel, None);
         }
         if depth < c.skin_thickness {
-            return Tissue::Skin;
+            return (Tissue::Skin, None);
         }
         // Lumens first, then walls: where two vessels join (the GSV into
         // the CFV at the SFJ) one's wall inside the other's lumen is lumen.
-        if let Some(sv) = self
+        for (i, sv) in self.vessels.iter().enumerate() {
+            let (centre, h) = sv.vessel.chord(u, 0.0);
+            if (depth - centre).abs() < h {
+                let content = sv
+                    .condition()
+                    .is_some_and(|vc| vc.fill > 0.0 && vc.is_content((depth - centre) / h));
+                let t = if content {
+                    Tissue::Thrombus
+                } else {
+                    sv.tissues.0
+                };
+                return (t, Some(i));
+            }
+        }
+        if let Some(i) = self
             .vessels
             .iter()
-            .find(|x| x.vessel.contains(u, depth, 0.0))
+            .position(|x| x.vessel.contains(u, depth, x.vessel.wall))
         {
-            return sv.tissues.0;
+            return (self.vessels[i].tissues.1, Some(i));
         }
-        if let Some(sv) = self
-            .vessels
-            .iter()
-            .find(|x| x.vessel.contains(u, depth, x.vessel.wall))
-        {
-            return sv.tissues.1;
-        }
+        (self.tissue_outside_vessels(u, depth), None)
+    }
+
+    fn tissue_outside_vessels(&self, u: f64, depth: f64) -> Tissue {
+        let c = &self.cfg;
         let half_line = 0.5 * c.fascia_thickness;
         for (kind, v) in &self.others {
             match kind {
@@ -345,21 +378,52 @@ impl Anatomy {
         Tissue::Muscle
     }
 
-    /// Mean backscatter of `tissue` relative to muscle (dB) in this vein
-    /// state; `None` where there are no scatterers.
+    /// Mean backscatter of `tissue` relative to muscle (dB) for the studied
+    /// vein's condition; `None` where there are no scatterers. Vessel
+    /// tissues of other veins: [`Anatomy::echo_at`].
     pub fn echo_db(&self, tissue: Tissue) -> Option<f64> {
-        match tissue {
-            Tissue::VeinLumen => Some(self.vein_params.content_echo),
-            Tissue::VeinWall => Some(self.vein_params.wall_echo),
-            t => t.acoustics().echo_db,
+        self.echo_of(tissue, Some(0))
+    }
+
+    /// One-way attenuation slope of `tissue` (dB/(cm·MHz)) for the studied vein.
+    pub fn attenuation(&self, tissue: Tissue) -> f64 {
+        self.attenuation_of(tissue, Some(0))
+    }
+
+    /// Mean backscatter (dB re muscle) at `(u, depth)`, each vein by its own condition.
+    pub fn echo_at(&self, u: f64, depth: f64) -> Option<f64> {
+        let (t, i) = self.classify(u, depth);
+        self.echo_of(t, i)
+    }
+
+    /// One-way attenuation slope (dB/(cm·MHz)) at `(u, depth)`.
+    pub fn attenuation_at(&self, u: f64, depth: f64) -> f64 {
+        let (t, i) = self.classify(u, depth);
+        self.attenuation_of(t, i)
+    }
+
+    fn condition_of(&self, vessel: Option<usize>) -> Option<&VeinCondition> {
+        vessel
+            .and_then(|i| self.vessels.get(i))
+            .and_then(|v| v.condition())
+    }
+
+    pub(crate) fn echo_of(&self, tissue: Tissue, vessel: Option<usize>) -> Option<f64> {
+        let vc = self.condition_of(vessel);
+        match (tissue, vc) {
+            (Tissue::Thrombus, Some(c)) => Some(c.content_echo),
+            (Tissue::VeinWall | Tissue::VesselWall, Some(c)) => Some(c.wall_echo),
+            // Blood of the studied vein: the healthy state's content.
+            (Tissue::VeinLumen, _) => Some(self.cfg.healthy.content_echo),
+            (t, _) => t.acoustics().echo_db,
         }
     }
 
-    /// One-way attenuation slope of `tissue` (dB/(cm·MHz)) in this vein state.
-    pub fn attenuation(&self, tissue: Tissue) -> f64 {
-        match tissue {
-            Tissue::VeinLumen => self.vein_params.content_attenuation,
-            t => t.acoustics().attenuation,
+    fn attenuation_of(&self, tissue: Tissue, vessel: Option<usize>) -> f64 {
+        match (tissue, self.condition_of(vessel)) {
+            (Tissue::Thrombus, Some(c)) => c.content_attenuation,
+            (Tissue::VeinLumen, _) => self.cfg.healthy.content_attenuation,
+            (t, _) => t.acoustics().attenuation,
         }
     }
 
@@ -379,6 +443,21 @@ impl Anatomy {
         push(0.0, &mut n);
         push(c.skin_thickness, &mut n);
         push(c.skin_thickness + c.fat_thickness, &mut n);
+        // Content boundaries inside vein lumens (see `VeinCondition::is_content`).
+        for sv in &self.vessels {
+            if let Some(vc) = sv.condition().filter(|vc| vc.fill > 0.0 && vc.fill < 1.0) {
+                let (cl, hl) = sv.vessel.chord(u, 0.0);
+                if hl > 0.0 {
+                    match vc.layout {
+                        ContentLayout::Mural => push(cl + hl * (1.0 - 2.0 * vc.fill), &mut n),
+                        ContentLayout::Central => {
+                            push(cl - hl * vc.fill, &mut n);
+                            push(cl + hl * vc.fill, &mut n);
+                        }
+                    }
+                }
+            }
+        }
         for v in self.vessels.iter().map(|x| &x.vessel).chain(
             self.others
                 .iter()
@@ -418,7 +497,7 @@ impl Anatomy {
     /// Vein lumen area relative to rest (the vertical flattening `c`) under
     /// the tissue pressure `pressure` (Pa) at the vein.
     pub fn vein_lumen_ratio(&self, pressure: f64) -> f64 {
-        vein_law(&self.vein_params, pressure)
+        self.lumen_ratio(0, pressure, 0.0)
     }
 
     /// Artery lumen area relative to its diastolic rest, under the tissue

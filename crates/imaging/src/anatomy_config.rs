@@ -38,6 +38,7 @@
 
 use crate::error::ImagingError;
 use crate::structure_config::{StructureConfig, MAX_STRUCTURES};
+use crate::vein_condition::VeinCondition;
 use serde::{Deserialize, Serialize};
 
 /// One millimetre of mercury in pascals.
@@ -309,6 +310,12 @@ pub struct AnatomyConfig {
     /// leg cuts them (`echothigh image --at/--site` fills them). Default
     /// none (the mid-thigh pair alone). At most 12.
     pub structures: Vec<StructureConfig>,
+    /// The studied vein's own condition (`[imaging.anatomy.vein_condition]`,
+    /// issue 13: a case's thrombus segment state at the section's `s`).
+    /// Default none: the vein follows the renderer's global [`VeinState`]
+    /// (`healthy`, `acute`, `chronic` above).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vein_condition: Option<VeinCondition>,
 }
 
 impl Default for AnatomyConfig {
@@ -338,6 +345,7 @@ impl Default for AnatomyConfig {
             acute: VeinStateParams::acute(),
             chronic: VeinStateParams::chronic(),
             structures: Vec::new(),
+            vein_condition: None,
         }
     }
 }
@@ -350,6 +358,12 @@ impl AnatomyConfig {
             VeinState::Acute => &self.acute,
             VeinState::Chronic => &self.chronic,
         }
+    }
+
+    /// The studied vein's condition: `vein_condition` if set, else that of `state`.
+    pub fn studied_condition(&self, state: VeinState) -> VeinCondition {
+        self.vein_condition
+            .unwrap_or_else(|| VeinCondition::of_state(state, self.vein(state), &self.healthy))
     }
 
     /// Depth of the femur's top below the skin at rest (m): skin + fat + muscle.
@@ -541,6 +555,22 @@ impl AnatomyConfig {
         self.healthy.validate(&format!("{p}.healthy"))?;
         self.acute.validate(&format!("{p}.acute"))?;
         self.chronic.validate(&format!("{p}.chronic"))?;
+        if let Some(vc) = &self.vein_condition {
+            vc.validate(&format!("{p}.vein_condition"))?;
+            // A distended vein may bulge into the fat (lumens are drawn
+            // first), but must stay under the skin and above the femur.
+            let r = 0.5 * self.vein_diameter * vc.diameter_factor + vc.wall_thickness;
+            if !(self.vein_depth - r > self.skin_thickness
+                && self.vein_depth + r < self.femur_top())
+            {
+                return Err(ImagingError::invalid(
+                    p,
+                    "vein_condition.diameter_factor",
+                    vc.diameter_factor,
+                    "the vein so distended would cross the skin or the femur",
+                ));
+            }
+        }
         // Vessels (largest state) must sit inside the muscle layer.
         let vein_r = 0.5
             * self.vein_diameter

@@ -49,6 +49,7 @@ mod scatterers;
 mod stages;
 mod structure_config;
 mod tissue;
+mod vein_condition;
 mod warp;
 
 pub use anatomy::{Anatomy, LumenLaw, SectionVessel, Vessel, MAX_BREAKPOINTS};
@@ -62,4 +63,5 @@ pub use output::write_gray_png;
 pub use render::{FrameInput, Lumen, LumenReport, Phantom, Renderer};
 pub use structure_config::{StructureConfig, StructureKind, MAX_STRUCTURES};
 pub use tissue::{Acoustics, Tissue};
+pub use vein_condition::{CollapseLaw, ContentLayout, VeinCondition};
 pub use warp::VesselWarp;

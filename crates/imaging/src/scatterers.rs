@@ -237,8 +237,8 @@ impl ScattererField {
             }
         }
         Self::generate(cfg, halo, cfg.scatterer_density, &mut rng, |u, d| {
-            let tissue = anatomy.tissue_at(u, d);
-            let db = anatomy.echo_db(tissue)?;
+            let (tissue, vessel) = anatomy.classify(u, d);
+            let db = anatomy.echo_of(tissue, vessel)?;
             let mut amp = 10f64.powf(db / 20.0);
             if tissue == Tissue::Cortex {
                 let (fu, fd) = anatomy.femur_centre();

@@ -179,8 +179,7 @@ pub(crate) fn compress_column(
             let n = a.column_breakpoints(u, &mut b);
             for i in 0..n {
                 let next = if i + 1 < n { b[i + 1] } else { b[i] + 2e-3 };
-                let tissue = a.tissue_at(u, 0.5 * (b[i] + next));
-                alpha[i] = a.attenuation(tissue);
+                alpha[i] = a.attenuation_at(u, 0.5 * (b[i] + next));
                 z[i] = image_depth(g, surface, warps, b[i]);
             }
             n

@@ -4,6 +4,7 @@
 //! section), each an ellipse in tissue coordinates.
 
 use crate::error::ImagingError;
+use crate::vein_condition::VeinCondition;
 use serde::{Deserialize, Serialize};
 
 /// Largest number of extra structures in a section.
@@ -47,6 +48,12 @@ pub struct StructureConfig {
     pub angle: f64,
     /// Wall thickness of a vessel (m); ignored otherwise. Accepted: 0 to 3 mm.
     pub wall: f64,
+    /// A vein's own condition (issue 13: its thrombus segment state at the
+    /// section); default none, a healthy vein (its `radii` and `wall` as
+    /// given). When set, the radii are scaled by its `diameter_factor` and
+    /// the wall is its `wall_thickness`. Only for `kind = "vein"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub condition: Option<VeinCondition>,
 }
 
 impl StructureConfig {
@@ -93,6 +100,18 @@ impl StructureConfig {
             0.0,
             3e-3,
             "must be between 0 and 3 mm",
-        )
+        )?;
+        if let Some(c) = &self.condition {
+            if self.kind != StructureKind::Vein {
+                return Err(ImagingError::invalid(
+                    prefix,
+                    "condition",
+                    self.name.as_str(),
+                    "only a vein has a condition",
+                ));
+            }
+            c.validate(&format!("{prefix}.condition"))?;
+        }
+        Ok(())
     }
 }

@@ -32,6 +32,10 @@ pub enum Tissue {
     ArteryLumen,
     /// Lumen of a patent vessel other than the studied vein (blood).
     Blood,
+    /// Thrombus or fibrous content inside a vein's lumen (issue 13); its
+    /// echo and attenuation are the vein's condition's
+    /// ([`crate::VeinCondition`]); the values here are the acute defaults.
+    Thrombus,
     /// Wall of a vein other than the studied one.
     VesselWall,
     /// Cortex of a lymph node (hypoechoic).
@@ -68,6 +72,7 @@ impl Tissue {
             Tissue::ArteryWall => (Some(6.0), 0.8),
             Tissue::ArteryLumen => (Some(-50.0), 0.15),
             Tissue::Blood => (Some(-50.0), 0.15),
+            Tissue::Thrombus => (Some(-24.0), 0.3),
             Tissue::VesselWall => (Some(4.0), 0.8),
             // A normal node: a hypoechoic cortex (about 15 dB under muscle)
             // around an echogenic fatty hilum (brighter than muscle); e.g.

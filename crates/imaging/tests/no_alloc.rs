@@ -53,6 +53,7 @@ fn render_into_with_extra_structures_does_not_allocate() {
         radii: [r, 0.8 * r],
         angle: 0.3,
         wall: 0.5e-3,
+        condition: None,
     };
     cfg.anatomy.structures = vec![
         st("gsv", StructureKind::Vein, 0.012, 0.008, 2e-3),

@@ -57,6 +57,7 @@ fn each_vessel_follows_its_own_law_at_its_own_pressure() {
         radii: [2e-3, 2e-3],
         angle: 0.0,
         wall: 0.4e-3,
+        condition: None,
     };
     cfg.anatomy.structures = vec![
         st("gsv", StructureKind::Vein, 0.012, 0.008),

@@ -19,6 +19,8 @@ pub mod physics_side;
 pub mod recorder;
 pub mod scenario;
 pub mod section;
+pub mod section_condition;
+pub mod section_image;
 pub mod signals;
 pub mod summary;
 pub mod tick;

@@ -8,7 +8,7 @@
 //! medial on this right leg; `echothigh_anatomy::section`).
 
 use anyhow::{bail, Context, Result};
-use echothigh_anatomy::{Anatomy, Patient, ProbePose, Site, PRESETS};
+use echothigh_anatomy::{Anatomy, Kind, Patient, ProbePose, Site, PRESETS};
 use serde::Serialize;
 use std::path::Path;
 
@@ -29,6 +29,10 @@ pub struct Args {
     /// Named exam site: cfv, sfj, fv-proximal, fv-mid, fv-distal, popliteal.
     #[arg(long)]
     pub site: Option<String>,
+    /// A case (shipped name or case TOML file): its patient, and per vein
+    /// its thrombus state at the section (`state` in the JSON). Not with --patient.
+    #[arg(long)]
+    pub case: Option<String>,
     /// Print JSON (else a table).
     #[arg(long)]
     pub json: bool,
@@ -41,6 +45,8 @@ struct JsonStructure {
     depth_mm: f64,
     lateral_mm: f64,
     radii_mm: [f64; 2],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    state: Option<echothigh_anatomy::LumenState>,
 }
 
 #[derive(Serialize)]
@@ -67,8 +73,22 @@ pub fn load_patient(arg: &str) -> Result<Patient> {
 
 /// Runs `echothigh anatomy`.
 pub fn run(args: Args) -> Result<()> {
-    let patient = load_patient(&args.patient)?;
-    let anatomy = Anatomy::new(patient).with_context(|| format!("patient {}", args.patient))?;
+    let case = match &args.case {
+        Some(c) => {
+            if args.patient != "lean-male" {
+                bail!("--case sets the patient: drop --patient");
+            }
+            Some(super::cases::load_case(c)?)
+        }
+        None => None,
+    };
+    let anatomy = match &case {
+        Some(c) => c.anatomy.clone(),
+        None => {
+            let patient = load_patient(&args.patient)?;
+            Anatomy::new(patient).with_context(|| format!("patient {}", args.patient))?
+        }
+    };
     let pose = match (&args.site, args.at) {
         (Some(name), _) => anatomy.site_pose(name.parse::<Site>()?),
         (None, Some(at_mm)) => {
@@ -94,6 +114,10 @@ pub fn run(args: Args) -> Result<()> {
                 depth_mm: x.ellipse.depth * 1e3,
                 lateral_mm: x.ellipse.lateral * 1e3,
                 radii_mm: [x.ellipse.radii[0] * 1e3, x.ellipse.radii[1] * 1e3],
+                state: case.as_ref().and_then(|c| {
+                    matches!(x.kind, Kind::DeepVein | Kind::SuperficialVein)
+                        .then(|| c.thrombi.state(x.id, x.s))
+                }),
             })
             .collect(),
     };
@@ -112,8 +136,16 @@ pub fn run(args: Args) -> Result<()> {
             "id", "kind", "depth_mm", "lateral_mm", "radii_mm"
         );
         for x in &out.structures {
+            let state = x.state.map_or(String::new(), |st| {
+                format!(
+                    "  thrombus {:.0} % (acute {:.2}, chronic {:.2})",
+                    st.fill * 100.0,
+                    st.acute,
+                    st.chronic
+                )
+            });
             println!(
-                "{:<11} {:<17} {:>9.1} {:>11.1} {:>7.1} {:>7.1}",
+                "{:<11} {:<17} {:>9.1} {:>11.1} {:>7.1} {:>7.1}{state}",
                 x.id, x.kind, x.depth_mm, x.lateral_mm, x.radii_mm[0], x.radii_mm[1]
             );
         }

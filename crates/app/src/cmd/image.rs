@@ -72,6 +72,12 @@ pub struct Args {
     /// fv-distal, popliteal (a level and a probe angle).
     #[arg(long)]
     pub site: Option<String>,
+    /// A case (a shipped case's name, `echothigh cases list`, or a case TOML
+    /// file): its patient and thrombus segments; with --at or --site, each
+    /// vein of the section drawn in its segment's state there (instead of
+    /// --vein). Not with --patient.
+    #[arg(long, conflicts_with = "patient")]
+    pub case: Option<String>,
     /// Render a test phantom instead of the thigh: points, speckle or cyst.
     #[arg(long, value_enum)]
     pub phantom: Option<PhantomKind>,
@@ -181,10 +187,44 @@ fn write(path: &Path, cfg: &ImagingConfig, frame: &[u8]) -> Result<()> {
 pub fn run(args: Args) -> Result<()> {
     let scenario = load_scenario(&args)?;
     let mut cfg = scenario.imaging_config();
-    if args.patient.is_some() || args.at.is_some() || args.site.is_some() || args.angle.is_some() {
-        let patient = args.patient.as_deref().unwrap_or("lean-male");
-        let placement = image_site::place(patient, args.at, args.angle, args.site.as_deref())?;
-        cfg.anatomy = image_site::section_anatomy(&cfg.anatomy, &placement)?;
+    let case = args
+        .case
+        .as_deref()
+        .map(super::cases::load_case)
+        .transpose()?;
+    if case.is_some()
+        || args.patient.is_some()
+        || args.at.is_some()
+        || args.site.is_some()
+        || args.angle.is_some()
+    {
+        let (patient, placement) = match &case {
+            Some(c) => (
+                c.name().to_string(),
+                image_site::place_on(c.anatomy.clone(), args.at, args.angle, args.site.as_deref())?,
+            ),
+            None => {
+                let patient = args.patient.as_deref().unwrap_or("lean-male");
+                let at = image_site::place(patient, args.at, args.angle, args.site.as_deref())?;
+                (patient.to_string(), at)
+            }
+        };
+        cfg.anatomy = match &case {
+            Some(c) => image_site::case_section_anatomy(&cfg.anatomy, &placement, &c.thrombi)?,
+            None => image_site::section_anatomy(&cfg.anatomy, &placement)?,
+        };
+        if let Some(c) = &case {
+            let vein = placement.anatomy.deep_vein_at(placement.pose.s);
+            let st = c.thrombi.state(vein, placement.pose.s);
+            println!(
+                "case {}: {} at s = {:.1} mm: thrombus fills {:.0} % of the lumen (smallest lumen {:.0} % of rest)",
+                c.name(),
+                vein.as_str(),
+                placement.pose.s * 1e3,
+                st.fill * 100.0,
+                st.min_lumen_ratio() * 100.0
+            );
+        }
         println!(
             "patient {patient}, s = {:.1} mm, angle {:.1}°: {} {:.1} mm deep, {:.1} mm wide",
             placement.pose.s * 1e3,
@@ -216,7 +256,7 @@ pub fn run(args: Args) -> Result<()> {
         println!(
             "{}: {} vein at {:.1} N (indentation {:.1} mm): vein lumen {:.0} % of rest, artery {:.0} %",
             args.out.display(),
-            args.vein.name(),
+            if case.is_some() { "case" } else { args.vein.name() },
             press.force,
             press.indentation * 1e3,
             vein * 100.0,

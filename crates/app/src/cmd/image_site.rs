@@ -1,24 +1,12 @@
 //! `echothigh image --patient P (--at S [--angle A] | --site NAME)`: the
-//! imaging anatomy taken from the section of the 3D leg (`echothigh-anatomy`)
-//! under a probe held normal to the skin there.
-//!
-//! The B-mode renderer draws the studied vein–artery pair over the femur,
-//! with the skin, fat, fascia and muscle layers, and the section's other
-//! structures; this module fills those from the section: the deep vein of
-//! the level (`cfv`, `fv` or `pv`) and its companion artery (`cfa`, `fa`,
-//! `pa`) with their position, depth and area-equivalent diameter (`2 √(a b)`
-//! of the cut ellipse, which keeps the lumen's area when the plane is
-//! oblique), the femur's position and radius, the skin's and the fascia's
-//! depth; and every other structure the plane cuts (GSV, profunda vein and
-//! artery, a duplicated femoral vein, sartorius, a lymph node) as its cut
-//! ellipse in `imaging.anatomy.structures` (veins with the healthy lumen
-//! law, arteries with the artery law, the sartorius as a muscle outline).
+//! probe's placement on the leg from the command line; the imaging anatomy
+//! of the section there comes from
+//! [`echothigh_runtime::section_image::section_anatomy`].
 
 use crate::cmd::anatomy::load_patient;
 use anyhow::{bail, Context, Result};
-use echothigh_anatomy::Kind;
-use echothigh_anatomy::{Anatomy, ProbePose, Section, Site, StructureId};
-use echothigh_imaging::{AnatomyConfig, StructureConfig, StructureKind};
+use echothigh_anatomy::{Anatomy, ProbePose, Site, Thrombi};
+use echothigh_imaging::AnatomyConfig;
 
 /// Where the probe is on the leg: a patient and a level (or a site).
 #[derive(Debug, Clone)]
@@ -40,6 +28,16 @@ pub fn place(
 ) -> Result<Placement> {
     let p = load_patient(patient)?;
     let anatomy = Anatomy::new(p).with_context(|| format!("patient {patient}"))?;
+    place_on(anatomy, at_mm, angle_deg, site)
+}
+
+/// As [`place`] on an already built anatomy (a case's, `--case`).
+pub fn place_on(
+    anatomy: Anatomy,
+    at_mm: Option<f64>,
+    angle_deg: Option<f64>,
+    site: Option<&str>,
+) -> Result<Placement> {
     let pose = match (site, at_mm) {
         (Some(_), Some(_)) => bail!("give either --site or --at, not both"),
         (Some(name), None) => {
@@ -58,114 +56,29 @@ pub fn place(
                 None => anatomy.pose_over(s, anatomy.deep_vein_at(s))?,
             }
         }
-        (None, None) => bail!("--patient needs --at or --site"),
+        (None, None) => bail!("--patient and --case need --at or --site"),
     };
     Ok(Placement { anatomy, pose })
 }
 
-/// The companion artery of a deep vein.
-fn artery_of(vein: StructureId) -> StructureId {
-    match vein {
-        StructureId::Cfv => StructureId::Cfa,
-        StructureId::Fv => StructureId::Fa,
-        _ => StructureId::Pa,
-    }
-}
-
-/// `base` with its layers, vessels and femur taken from the section at
-/// `placement` (validated with the prefix `imaging.anatomy`: a section the
-/// renderer cannot draw, e.g. a vessel beyond ±50 mm of the probe's centre,
-/// is refused naming the key).
+/// `base` with its layers, vessels and femur taken from the section under
+/// the probe at `placement` (see
+/// [`echothigh_runtime::section_image::section_anatomy`]).
 pub fn section_anatomy(base: &AnatomyConfig, placement: &Placement) -> Result<AnatomyConfig> {
-    let a = &placement.anatomy;
-    let section = a.section(&placement.pose)?;
-    let vein_id = a.deep_vein_at(placement.pose.s);
-    let cut = |id: StructureId| -> Result<(f64, f64, f64)> {
-        let x = section.get(id).with_context(|| {
-            format!(
-                "the section at s = {:.1} mm does not cut `{}`: aim the probe at it (--angle)",
-                placement.pose.s * 1e3,
-                id.as_str()
-            )
-        })?;
-        let e = &x.ellipse;
-        Ok((e.lateral, e.depth, 2.0 * (e.radii[0] * e.radii[1]).sqrt()))
-    };
-    let (vl, vd, vdia) = cut(vein_id)?;
-    let (al, ad, adia) = cut(artery_of(vein_id))?;
-    let (fl, fd, fdia) = cut(StructureId::Femur)?;
-    let femur_r = 0.5 * fdia;
-    let mut c = base.clone();
-    c.skin_thickness = section.skin_depth;
-    c.fat_thickness = section.fascia_depth - section.skin_depth;
-    c.vein_lateral = vl;
-    c.vein_depth = vd;
-    c.vein_diameter = vdia;
-    c.artery_lateral = al;
-    c.artery_depth = ad;
-    c.artery_diameter = adia;
-    c.femur_lateral = fl;
-    c.femur_radius = femur_r;
-    c.muscle_thickness = fd - femur_r - section.fascia_depth;
-    c.intermuscular_fascia_depth = intermuscular(&section, c.intermuscular_fascia_depth);
-    c.structures = extra_structures(&section, &[vein_id, artery_of(vein_id)], base);
-    c.validate("imaging.anatomy").with_context(|| {
-        format!(
-            "the section at s = {:.1} mm, angle {:.1}° cannot be drawn",
-            placement.pose.s * 1e3,
-            placement.pose.theta.to_degrees()
-        )
-    })?;
-    Ok(c)
+    echothigh_runtime::section_image::section_anatomy(base, &placement.anatomy, &placement.pose)
 }
 
-/// Depth (m) of the sartorius' deep surface when the section cuts it (the
-/// adductor canal's roof), else `fallback`.
-fn intermuscular(section: &Section, fallback: f64) -> f64 {
-    section
-        .get(StructureId::Sartorius)
-        .map(|x| x.ellipse.depth + x.ellipse.radii[0].min(x.ellipse.radii[1]))
-        .unwrap_or(fallback)
-}
-
-/// Every structure of `section` but `drawn` (the studied pair) and the
-/// bones, as the renderer's extra structures; structures beyond the
-/// renderer's reach (more than 200 mm aside or 250 mm deep) are left out.
-fn extra_structures(
-    section: &Section,
-    drawn: &[StructureId],
+/// As [`section_anatomy`], each vein with its condition from `thrombi`
+/// (a case's segments, `--case`) at the section.
+pub fn case_section_anatomy(
     base: &AnatomyConfig,
-) -> Vec<StructureConfig> {
-    section
-        .structures
-        .iter()
-        .filter(|x| !drawn.contains(&x.id))
-        .filter_map(|x| {
-            let (kind, wall) = match x.kind {
-                Kind::DeepVein | Kind::SuperficialVein => {
-                    (StructureKind::Vein, base.healthy.wall_thickness)
-                }
-                Kind::Artery => (StructureKind::Artery, base.artery_wall_thickness),
-                Kind::Muscle => (StructureKind::Muscle, 0.0),
-                Kind::LymphNode => (StructureKind::LymphNode, 0.0),
-                Kind::Bone => return None,
-            };
-            let e = &x.ellipse;
-            let st = StructureConfig {
-                name: x.id.as_str().to_string(),
-                kind,
-                lateral: e.lateral,
-                depth: e.depth,
-                radii: e.radii,
-                angle: e.angle,
-                wall,
-            };
-            st.validate("imaging.anatomy.structure").ok().map(|_| st)
-        })
-        .take(echothigh_imaging::MAX_STRUCTURES)
-        .collect()
+    placement: &Placement,
+    thrombi: &Thrombi,
+) -> Result<AnatomyConfig> {
+    echothigh_runtime::section_image::section_anatomy_with(
+        base,
+        &placement.anatomy,
+        &placement.pose,
+        Some(thrombi),
+    )
 }
-
-#[cfg(test)]
-#[path = "image_site_tests.rs"]
-mod tests;

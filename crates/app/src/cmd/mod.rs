@@ -3,6 +3,7 @@
 pub mod anatomy;
 pub mod calibrate;
 pub mod calibrate_device;
+pub mod cases;
 pub mod device_arg;
 pub mod devices;
 pub mod image;

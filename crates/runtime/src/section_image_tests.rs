@@ -12,12 +12,21 @@ fn gray_per_db(cfg: &ImagingConfig) -> f64 {
     255.0 / cfg.dynamic_range
 }
 
-/// The renderer and its frame at rest for `--at s_mm` or a site.
+/// The renderer and its frame at rest on the lean male, at `at_mm` below
+/// the inguinal ligament over the deep vein, or at a site.
 fn frame(at_mm: Option<f64>, site: Option<&str>) -> (Renderer, Vec<u8>, Section) {
-    let p = place("lean-male", at_mm, None, site).unwrap();
+    let anatomy = Anatomy::new(echothigh_anatomy::Patient::preset("lean-male").unwrap()).unwrap();
+    let pose = match (at_mm, site) {
+        (_, Some(name)) => anatomy.site_pose(name.parse().unwrap()),
+        (Some(mm), None) => {
+            let s = mm * 1e-3;
+            anatomy.pose_over(s, anatomy.deep_vein_at(s)).unwrap()
+        }
+        (None, None) => unreachable!("a test gives --at or a site"),
+    };
     let mut cfg = ImagingConfig::default().live();
-    cfg.anatomy = section_anatomy(&cfg.anatomy, &p).unwrap();
-    let section = p.anatomy.section(&p.pose).unwrap();
+    cfg.anatomy = section_anatomy(&cfg.anatomy, &anatomy, &pose).unwrap();
+    let section = anatomy.section(&pose).unwrap();
     let mut r = Renderer::new(&cfg, VeinState::Healthy).unwrap();
     let rest = SectionDeformation::rest(r.anatomy().unwrap().femur_top());
     let img = r
