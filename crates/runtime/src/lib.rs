@@ -19,6 +19,7 @@ pub mod physics_side;
 pub mod recorder;
 pub mod scenario;
 pub mod section;
+pub mod section_follow;
 pub mod section_image;
 pub mod signals;
 pub mod summary;
