@@ -316,3 +316,7 @@ impl ScattererField {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "material_tests.rs"]
+mod tests;

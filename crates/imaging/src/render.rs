@@ -202,7 +202,9 @@ impl Renderer {
             });
         };
         let offset = elevation - slab.window.elevation;
-        if !offset.is_finite() || offset.abs() > slab.window.margin {
+        // 1 nm of slack: an elevation clamped to the window's edge comes
+        // back from `(e + m) − e` a rounding off `m`.
+        if !offset.is_finite() || offset.abs() > slab.window.margin + 1e-9 {
             return Err(ImagingError::Input {
                 field: "elevation",
                 reason: "must lie within the material window's margin",

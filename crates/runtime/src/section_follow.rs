@@ -171,13 +171,27 @@ impl SectionImager {
         Ok(Outcome::Built(Box::new(r), threshold))
     }
 
-    /// Follows the probe to `pose`: rebuilds the section when the probe
-    /// has moved more than the threshold from the drawn section and from
-    /// the last attempt (along the leg, around it, or tilted by
-    /// `δ / depth`), else moves the plane across the slice. Returns whether
-    /// it rebuilt. A section that cannot be drawn keeps the last one (see
+    /// Follows the probe to `pose` on the calling thread: rebuilds the
+    /// section when it is [due](SectionImager::due), else moves the plane
+    /// across the slice ([`SectionImager::track`]). Returns whether it
+    /// rebuilt. A section that cannot be drawn keeps the last one (see
     /// [`SectionImager::last_error`]).
     pub fn follow(&mut self, pose: &ProbePose) -> Result<bool> {
+        if self.due(pose) {
+            self.mark_tried(pose);
+            let b = self.builder().build(pose, self.vein)?;
+            if self.install(b) {
+                return Ok(true);
+            }
+        }
+        self.track(pose)?;
+        Ok(false)
+    }
+
+    /// Whether the probe at `pose` has moved more than the threshold from
+    /// the drawn section and from the last attempt (along the leg, around
+    /// it, or tilted by `δ / depth`).
+    pub fn due(&self, pose: &ProbePose) -> bool {
         let a = self.leg.anatomy();
         let d = self.threshold;
         let depth = self.cfg.depth;
@@ -186,20 +200,48 @@ impl SectionImager {
                 || (material_lateral(a, pose) - material_lateral(a, from)).abs() > d
                 || (pose.tilt - from.tilt).abs() * depth > d
         };
-        if moved(&self.tried) && moved(&self.built) {
-            self.tried = *pose;
-            match Self::build(&self.leg, &self.cfg, self.vein, pose, None)? {
-                Outcome::Built(r, t) => {
-                    self.renderer = *r;
-                    self.built = *pose;
-                    self.threshold = t;
-                    self.rebuilds += 1;
-                    self.last_error = None;
-                    return Ok(true);
-                }
-                Outcome::Undrawable(e) => self.last_error = Some(e),
+        moved(&self.tried) && moved(&self.built)
+    }
+
+    /// Records an attempt at `pose` (a build was asked for there).
+    pub fn mark_tried(&mut self, pose: &ProbePose) {
+        self.tried = *pose;
+    }
+
+    /// What builds this imager's sections, for another thread.
+    pub fn builder(&self) -> SectionBuilder {
+        SectionBuilder {
+            leg: self.leg.clone(),
+            cfg: self.cfg.clone(),
+        }
+    }
+
+    /// Installs a section built by [`SectionBuilder::build`]: returns
+    /// whether it was drawable and for the current vein state (else it is
+    /// dropped, its error kept in [`SectionImager::last_error`]).
+    pub fn install(&mut self, b: SectionBuild) -> bool {
+        if b.vein != self.vein {
+            return false;
+        }
+        match b.outcome {
+            Outcome::Built(r, t) => {
+                self.renderer = *r;
+                self.built = b.pose;
+                self.threshold = t;
+                self.rebuilds += 1;
+                self.last_error = None;
+                true
+            }
+            Outcome::Undrawable(e) => {
+                self.last_error = Some(e);
+                false
             }
         }
+    }
+
+    /// Moves the image plane to the probe's `s` across the slice, within the
+    /// drawn section's margin.
+    pub fn track(&mut self, pose: &ProbePose) -> Result<()> {
         let win = self
             .renderer
             .material_window()
@@ -209,8 +251,7 @@ impl SectionImager {
             .clamp(win.elevation - win.margin, win.elevation + win.margin);
         self.renderer
             .set_elevation(e)
-            .map_err(|e| anyhow::anyhow!("imaging: {e}"))?;
-        Ok(false)
+            .map_err(|e| anyhow::anyhow!("imaging: {e}"))
     }
 
     /// The lateral offset (m) of the probe at `pose` from the drawn
@@ -276,7 +317,35 @@ impl SectionImager {
     }
 }
 
+/// Builds sections of one leg and image geometry (on any thread).
+#[derive(Debug, Clone)]
+pub struct SectionBuilder {
+    leg: LegSurface,
+    cfg: ImagingConfig,
+}
+
+impl SectionBuilder {
+    /// The section at `pose` with the vein in `vein` (tens to hundreds of
+    /// ms: the scatterer field is drawn anew).
+    pub fn build(&self, pose: &ProbePose, vein: VeinState) -> Result<SectionBuild> {
+        Ok(SectionBuild {
+            pose: *pose,
+            vein,
+            outcome: SectionImager::build(&self.leg, &self.cfg, vein, pose, None)?,
+        })
+    }
+}
+
+/// A section built for [`SectionImager::install`].
+#[derive(Debug)]
+pub struct SectionBuild {
+    pose: ProbePose,
+    vein: VeinState,
+    outcome: Outcome,
+}
+
 /// What [`SectionImager::build`] made.
+#[derive(Debug)]
 enum Outcome {
     /// A renderer and its threshold (m).
     Built(Box<Renderer>, f64),

@@ -12,6 +12,7 @@
 //! playing the exam keeps the thigh and hands the probe to the script;
 //! resetting starts from rest.
 
+mod imaging_source;
 mod publish;
 mod session;
 mod shared;

@@ -1,16 +1,14 @@
 //! What the physics publishes for the front end (mesh, forces, the section
 //! under the probe) and the imaging thread that renders it.
 
+use super::imaging_source::{Probe, Source};
 use super::shared::{vein_of, Shared};
 use crate::physics_side::{self, PhysicsSide};
 use crate::scenario::Scenario;
 use crate::section::{lateral_offset, section_deformation, SectionScratch};
-use crate::section_follow::{leg_pose, SectionImager};
 use anyhow::{Context, Result};
 use echothigh_anatomy::Levels;
-use echothigh_imaging::{
-    Anatomy, FrameInput, ImagingConfig, Renderer, SectionDeformation, VeinState,
-};
+use echothigh_imaging::{Anatomy, FrameInput, ImagingConfig, SectionDeformation, VeinState};
 use echothigh_model::{LegSurface, ThighGeometry};
 use echothigh_transport::ProbeMsg;
 use nalgebra::Isometry3;
@@ -175,82 +173,6 @@ impl ImagingThread {
 /// when nobody unparks it (s); a page opening or a stop unparks it at once.
 const IDLE_NAP: Duration = Duration::from_millis(200);
 
-/// The probe's part of a frame's input, copied out of the shared image input.
-struct Probe {
-    pressure: f64,
-    time: f64,
-    lateral_offset: f64,
-    position: [f64; 3],
-    orientation: [f64; 4],
-}
-
-/// What the imaging thread renders: the scenario's fixed section, or the
-/// section under the probe on the patient's leg.
-enum Source {
-    Fixed(Box<Renderer>),
-    Leg(Box<SectionImager>),
-}
-
-impl Source {
-    fn new(
-        shared: &Shared,
-        cfg: &ImagingConfig,
-        leg: Option<LegSurface>,
-        vein: VeinState,
-    ) -> Result<Self> {
-        Ok(match leg {
-            None => Source::Fixed(Box::new(
-                Renderer::new(cfg, vein).map_err(|e| anyhow::anyhow!("imaging: {e}"))?,
-            )),
-            Some(leg) => {
-                let (pos, q) = shared
-                    .image_input
-                    .lock()
-                    .map(|i| (i.probe_position, i.probe_orientation))
-                    .map_err(|_| {
-                        anyhow::anyhow!("imaging: the physics' image input is poisoned")
-                    })?;
-                // Before the physics publishes: the anterior line at the
-                // mesh's centre.
-                let pose = leg_pose(&leg, pos, q).unwrap_or_else(|_| {
-                    echothigh_anatomy::ProbePose::transverse(leg.s_of_z(0.0), 0.0)
-                });
-                Source::Leg(Box::new(SectionImager::new(leg, cfg, vein, pose)?))
-            }
-        })
-    }
-
-    fn set_vein(&mut self, cfg: &ImagingConfig, vein: VeinState) -> Result<()> {
-        match self {
-            Source::Fixed(r) => {
-                **r = Renderer::new(cfg, vein)
-                    .map_err(|e| anyhow::anyhow!("imaging the new vein state: {e}"))?;
-            }
-            Source::Leg(f) => f.set_vein(vein)?,
-        }
-        Ok(())
-    }
-
-    /// Follows the probe (on the leg) and returns the renderer and the
-    /// frame's lateral offset (m).
-    fn frame(&mut self, input: &Probe) -> Result<(&mut Renderer, f64)> {
-        match self {
-            Source::Fixed(r) => Ok((r, input.lateral_offset)),
-            Source::Leg(f) => {
-                let offset = match leg_pose(f.leg(), input.position, input.orientation) {
-                    Ok(pose) => {
-                        f.follow(&pose)?;
-                        f.lateral_offset(&pose)
-                    }
-                    // Beyond the leg's ends: the last section, unpanned.
-                    Err(_) => 0.0,
-                };
-                Ok((f.renderer(), offset))
-            }
-        }
-    }
-}
-
 /// The imaging thread's body: until `stop`, render a frame every 50 ms
 /// while a page looks, park while none does.
 fn imaging_loop(
@@ -292,7 +214,7 @@ fn imaging_loop(
                 orientation: i.probe_orientation,
             }
         };
-        let (renderer, lateral_offset) = source.frame(&input)?;
+        let (renderer, lateral_offset) = source.frame(&input, vein_of(vein))?;
         if let Some(a) = renderer.anatomy() {
             // The drawn section's femur (the deformation falls to 0 there);
             // kept below the deepest skin displacement, which the model's
