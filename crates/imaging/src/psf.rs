@@ -39,6 +39,12 @@ pub(crate) struct PsfTables {
     pub elev_diffuse: Vec<f32>,
     /// Elevation weight per splat row for point targets on the image plane.
     pub elev_point: Vec<f32>,
+    /// Elevation width per splat row (m): the `σ` of the Gaussian
+    /// `w(y) = w(0) e^{−y²/(2σ²)}` with the slice's own `w(0)` and
+    /// `∫ w² dy` (`∫ w² = w(0)² σ √π`, so `σ = (√∫w² / w(0))² / √π`),
+    /// for tissue scatterers placed across the slice
+    /// ([`crate::Renderer::in_tissue`]).
+    pub slice_sigma: Vec<f64>,
     /// Mean echo intensity of a unit-power medium of unit density (per m²)
     /// at each image row (envelope² · m²), before attenuation.
     pub speckle_unit: Vec<f64>,
@@ -139,6 +145,14 @@ impl PsfTables {
         let elev_diffuse: Vec<f32> = (0..rows + 2 * pad)
             .map(|r| (BeamProfiles::interp(&prof.diffuse, splat_z(r)) / diffuse_norm) as f32)
             .collect();
+        let slice_sigma: Vec<f64> = (0..rows + 2 * pad)
+            .map(|r| {
+                let z = splat_z(r);
+                let ratio =
+                    BeamProfiles::interp(&prof.diffuse, z) / BeamProfiles::interp(&prof.point, z);
+                ratio * ratio / PI.sqrt()
+            })
+            .collect();
         let speckle_unit = (0..rows)
             .map(|i| {
                 let lat_e: f64 = (-(lat_half as i64)..=lat_half as i64)
@@ -164,6 +178,7 @@ impl PsfTables {
             lateral,
             elev_diffuse,
             elev_point,
+            slice_sigma,
             speckle_unit,
             focus_row: ((focus_z / dz) as usize).min(rows - 1),
             phase,

@@ -15,6 +15,7 @@ use crate::anatomy_config::VeinState;
 use crate::config::ImagingConfig;
 use crate::deformation::{column_depth, SectionDeformation};
 use crate::error::ImagingError;
+use crate::material::MaterialWindow;
 use crate::pressure::stress_under_rectangle;
 use crate::psf::PsfTables;
 use crate::scatterers::ScattererField;
@@ -145,6 +146,74 @@ impl Renderer {
         let tables = PsfTables::shared(cfg);
         let field = ScattererField::from_anatomy(cfg, tables.lat_half, &anatomy);
         Ok(Self::build(cfg, Some(anatomy), field, tables))
+    }
+
+    /// A renderer of the thigh section of `cfg` whose scatterers are fixed
+    /// in the tissue's 3-D material coordinates around `window`
+    /// ([`crate::material`]): moving the plane across the slice
+    /// ([`Renderer::set_elevation`]) or building a renderer for the next
+    /// window keeps the speckle of the same tissue. Errors as
+    /// [`Renderer::new`], and name `window` when it is not finite or its
+    /// margin is negative.
+    pub fn in_tissue(
+        cfg: &ImagingConfig,
+        state: VeinState,
+        window: MaterialWindow,
+    ) -> Result<Self, ImagingError> {
+        cfg.validate("imaging")?;
+        for (field, v) in [
+            ("window.lateral", window.lateral),
+            ("window.elevation", window.elevation),
+            ("window.margin", window.margin),
+        ] {
+            if !v.is_finite() {
+                return Err(ImagingError::Input {
+                    field,
+                    reason: "must be finite",
+                });
+            }
+        }
+        if window.margin < 0.0 {
+            return Err(ImagingError::Input {
+                field: "window.margin",
+                reason: "must be >= 0",
+            });
+        }
+        let anatomy = Anatomy::new(&cfg.anatomy, state)?;
+        let tables = PsfTables::shared(cfg);
+        let field = ScattererField::in_tissue(cfg, &tables, &anatomy, window);
+        Ok(Self::build(cfg, Some(anatomy), field, tables))
+    }
+
+    /// The material window of a renderer built by [`Renderer::in_tissue`].
+    pub fn material_window(&self) -> Option<MaterialWindow> {
+        self.field.slab.as_ref().map(|s| s.window)
+    }
+
+    /// Moves the image plane to material elevation `elevation` (m), within
+    /// the window's margin: each scatterer is weighed by the slice at its
+    /// distance from the plane. Errors for a 2-D field, a non-finite
+    /// elevation or one beyond the margin (build a new renderer there).
+    pub fn set_elevation(&mut self, elevation: f64) -> Result<(), ImagingError> {
+        let Some(slab) = self.field.slab.as_mut() else {
+            return Err(ImagingError::Input {
+                field: "elevation",
+                reason: "this renderer's scatterers are not in material coordinates",
+            });
+        };
+        let offset = elevation - slab.window.elevation;
+        // 1 nm of slack: an elevation clamped to the window's edge comes
+        // back from `(e + m) − e` a rounding off `m`.
+        if !offset.is_finite() || offset.abs() > slab.window.margin + 1e-9 {
+            return Err(ImagingError::Input {
+                field: "elevation",
+                reason: "must lie within the material window's margin",
+            });
+        }
+        if offset != slab.offset {
+            slab.weigh(offset, &mut self.field.amp);
+        }
+        Ok(())
     }
 
     /// A renderer of a phantom (speckle and PSF measurements).
@@ -521,6 +590,21 @@ impl Renderer {
     pub fn envelope(&self, column: usize, row: usize) -> f32 {
         let p = self.iq[column * self.cfg.rows + row];
         (p[0] * p[0] + p[1] * p[1]).sqrt()
+    }
+
+    /// Complex baseband echo `[I, Q]` of the last frame at `(column, row)`,
+    /// before attenuation, TGC, clutter, noise and compression (PSF
+    /// amplitude units, as [`Renderer::envelope`]).
+    pub fn iq(&self, column: usize, row: usize) -> [f32; 2] {
+        self.iq[column * self.cfg.rows + row]
+    }
+
+    /// The elevation slice's Gaussian width `σ` (m) at image row `row` (see
+    /// [`crate::material`]): the intensity correlation of tissue speckle
+    /// between planes `Δ` apart is `exp(−Δ²/(2σ²))`.
+    pub fn slice_sigma(&self, row: usize) -> f64 {
+        let t = &self.tables;
+        t.slice_sigma[(row + t.pad()).min(t.slice_sigma.len() - 1)]
     }
 
     fn check_out(&self, out: &[u8]) -> Result<(), ImagingError> {

@@ -37,6 +37,10 @@ pub(crate) struct ScattererField {
     /// Point targets on the image plane (elevation weight of the plane)
     /// rather than tissue (elevation weight of the slice).
     pub points: bool,
+    /// A field in material coordinates ([`crate::material`]): each
+    /// scatterer's elevation, Gaussian width and unweighted amplitude, so
+    /// that the plane can move across the slice; `None` for a 2-D field.
+    pub slab: Option<crate::material::Slab>,
 }
 
 /// Half-width of the specular lobe (rad): a smooth interface tilted by `θ`
@@ -63,11 +67,13 @@ pub(crate) fn specular_gain(n: (f64, f64)) -> f64 {
 
 /// A straight line of connective tissue in the section (tissue coordinates, m).
 #[derive(Debug, Clone, Copy)]
-struct Line {
-    a: (f64, f64),
-    b: (f64, f64),
-    half_width: f64,
-    gain: f64,
+pub(crate) struct Line {
+    pub a: (f64, f64),
+    pub b: (f64, f64),
+    pub half_width: f64,
+    pub gain: f64,
+    /// The tissue it brightens (`None`: fat and muscle alike).
+    pub only: Option<Tissue>,
 }
 
 impl Line {
@@ -83,7 +89,7 @@ impl Line {
 /// Random connective-tissue lines: `count` lines with centres in
 /// `[u0, u1] × [d0, d1]`, lengths in `len`, tilts within `±tilt` (rad).
 #[allow(clippy::too_many_arguments)]
-fn lines(
+pub(crate) fn lines(
     rng: &mut ChaCha8Rng,
     count: usize,
     (u0, u1): (f64, f64),
@@ -104,15 +110,105 @@ fn lines(
                 b: (c.0 + dx, c.1 + dy),
                 half_width,
                 gain: 10f64.powf(gain_db / 20.0),
+                only: None,
             }
         })
         .collect()
 }
 
+/// Connective-tissue lines indexed by 1 mm × 1 mm cells for the distance
+/// queries.
+pub(crate) struct LineIndex {
+    all: Vec<Line>,
+    /// Lateral position of cell column 0 (m).
+    u0: f64,
+    cols: usize,
+    rows: usize,
+    cells: Vec<Vec<u32>>,
+}
+
+impl LineIndex {
+    const CELL: f64 = 1e-3;
+
+    /// The index of `all`, down to `deep` (m).
+    pub fn new(all: Vec<Line>, deep: f64) -> Self {
+        let c = Self::CELL;
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for l in &all {
+            lo = lo.min(l.a.0.min(l.b.0) - l.half_width);
+            hi = hi.max(l.a.0.max(l.b.0) + l.half_width);
+        }
+        if all.is_empty() {
+            (lo, hi) = (0.0, 0.0);
+        }
+        let cols = ((hi - lo) / c).ceil() as usize + 1;
+        let rows = (deep / c).ceil() as usize + 1;
+        let mut cells: Vec<Vec<u32>> = vec![Vec::new(); cols * rows];
+        for (i, l) in all.iter().enumerate() {
+            let d0 = ((l.a.1.min(l.b.1) - l.half_width).max(0.0) / c) as usize;
+            let d1 = (((l.a.1.max(l.b.1) + l.half_width) / c) as usize).min(rows - 1);
+            let u_0 = ((l.a.0.min(l.b.0) - l.half_width - lo) / c) as usize;
+            let u_1 = (((l.a.0.max(l.b.0) + l.half_width - lo) / c) as usize).min(cols - 1);
+            for r in d0..=d1 {
+                for k in u_0..=u_1 {
+                    cells[r * cols + k].push(i as u32);
+                }
+            }
+        }
+        LineIndex {
+            all,
+            u0: lo,
+            cols,
+            rows,
+            cells,
+        }
+    }
+
+    /// Amplitude gain at `(u, d)` in `tissue`: the largest of the lines
+    /// through it, else 1.
+    fn boost(&self, u: f64, d: f64, tissue: Tissue) -> f64 {
+        let k = (u - self.u0) / Self::CELL;
+        if !(k >= 0.0 && (k as usize) < self.cols) || d < 0.0 {
+            return 1.0;
+        }
+        let r = ((d / Self::CELL) as usize).min(self.rows - 1);
+        self.cells[r * self.cols + k as usize]
+            .iter()
+            .map(|&i| &self.all[i as usize])
+            .filter(|l| l.only.is_none_or(|t| t == tissue))
+            .filter(|l| l.distance(u, d) < l.half_width)
+            .map(|l| l.gain)
+            .fold(1.0, f64::max)
+    }
+}
+
+/// RMS amplitude of a tissue scatterer at `(u, d)` (m, tissue
+/// coordinates): the tissue's mean backscatter, the bone's specular gain,
+/// the connective-tissue lines of `lines` in fat and muscle; `None` where
+/// nothing scatters (blood, lumen).
+pub(crate) fn tissue_amplitude(
+    anatomy: &Anatomy,
+    lines: &LineIndex,
+    u: f64,
+    d: f64,
+) -> Option<f64> {
+    let (tissue, vessel) = anatomy.classify(u, d);
+    let db = anatomy.echo_of(tissue, vessel)?;
+    let mut amp = 10f64.powf(db / 20.0);
+    if tissue == Tissue::Cortex {
+        let (fu, fd) = anatomy.femur_centre();
+        amp *= specular_gain((u - fu, d - fd));
+    }
+    if matches!(tissue, Tissue::Fat | Tissue::Muscle) {
+        amp *= lines.boost(u, d, tissue);
+    }
+    Some(amp)
+}
+
 impl ScattererField {
     /// Lateral geometry of `cfg` with `halo` columns each side: (halo, pan,
     /// bins, centre of bin 0 in m, anatomy frame).
-    fn bins(cfg: &ImagingConfig, halo: usize) -> (usize, usize, usize, f64) {
+    pub(crate) fn bins(cfg: &ImagingConfig, halo: usize) -> (usize, usize, usize, f64) {
         let dx = cfg.pixel_width();
         let pan = cfg.pan_columns();
         let bins = cfg.columns + 2 * halo + 2 * pan;
@@ -121,7 +217,7 @@ impl ScattererField {
     }
 
     /// Deepest populated tissue depth (m).
-    fn max_depth(cfg: &ImagingConfig) -> f64 {
+    pub(crate) fn max_depth(cfg: &ImagingConfig) -> f64 {
         cfg.depth + cfg.max_indentation + 1e-3
     }
 
@@ -184,6 +280,7 @@ impl ScattererField {
             depth,
             amp,
             points: false,
+            slab: None,
         }
     }
 
@@ -221,40 +318,9 @@ impl ScattererField {
             0.08e-3,
             9.0,
         ));
-        // Index the lines by 1 mm depth bands for the distance queries.
-        let band = 1e-3;
-        let nb = (deep / band).ceil() as usize + 1;
-        let mut bands: Vec<Vec<u32>> = vec![Vec::new(); nb];
-        for (i, l) in all.iter().enumerate() {
-            let lo = (l.a.1.min(l.b.1) - l.half_width).max(0.0);
-            let hi = l.a.1.max(l.b.1) + l.half_width;
-            for list in bands
-                .iter_mut()
-                .take(((hi / band) as usize + 1).min(nb))
-                .skip((lo / band) as usize)
-            {
-                list.push(i as u32);
-            }
-        }
+        let index = LineIndex::new(all, deep);
         Self::generate(cfg, halo, cfg.scatterer_density, &mut rng, |u, d| {
-            let (tissue, vessel) = anatomy.classify(u, d);
-            let db = anatomy.echo_of(tissue, vessel)?;
-            let mut amp = 10f64.powf(db / 20.0);
-            if tissue == Tissue::Cortex {
-                let (fu, fd) = anatomy.femur_centre();
-                amp *= specular_gain((u - fu, d - fd));
-            }
-            if matches!(tissue, Tissue::Fat | Tissue::Muscle) {
-                let list = &bands[((d / band) as usize).min(nb - 1)];
-                let boost = list
-                    .iter()
-                    .map(|&i| &all[i as usize])
-                    .filter(|l| l.distance(u, d) < l.half_width)
-                    .map(|l| l.gain)
-                    .fold(1.0, f64::max);
-                amp *= boost;
-            }
-            Some(amp)
+            tissue_amplitude(anatomy, &index, u, d)
         })
     }
 
@@ -308,6 +374,7 @@ impl ScattererField {
             depth,
             amp,
             points: true,
+            slab: None,
         }
     }
 

@@ -20,6 +20,7 @@ pub mod recorder;
 pub mod scenario;
 pub mod section;
 pub mod section_condition;
+pub mod section_follow;
 pub mod section_image;
 pub mod signals;
 pub mod summary;

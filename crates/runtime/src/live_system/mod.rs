@@ -12,6 +12,7 @@
 //! playing the exam keeps the thigh and hands the probe to the script;
 //! resetting starts from rest.
 
+mod imaging_source;
 mod publish;
 mod session;
 mod shared;
@@ -185,6 +186,8 @@ impl LiveSystem {
                 pressure: 0.0,
                 time: 0.0,
                 lateral_offset: 0.0,
+                probe_position: [0.0; 3],
+                probe_orientation: [1.0, 0.0, 0.0, 0.0],
             }),
             image: Mutex::new(ImageSlot {
                 pixels: vec![0; img.columns * img.rows],

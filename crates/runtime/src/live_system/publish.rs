@@ -1,15 +1,14 @@
 //! What the physics publishes for the front end (mesh, forces, the section
 //! under the probe) and the imaging thread that renders it.
 
+use super::imaging_source::{Probe, Source};
 use super::shared::{vein_of, Shared};
 use crate::physics_side::{self, PhysicsSide};
 use crate::scenario::Scenario;
 use crate::section::{lateral_offset, section_deformation, SectionScratch};
 use anyhow::{Context, Result};
 use echothigh_anatomy::Levels;
-use echothigh_imaging::{
-    Anatomy, FrameInput, ImagingConfig, Renderer, SectionDeformation, VeinState,
-};
+use echothigh_imaging::{Anatomy, FrameInput, ImagingConfig, SectionDeformation, VeinState};
 use echothigh_model::{LegSurface, ThighGeometry};
 use echothigh_transport::ProbeMsg;
 use nalgebra::Isometry3;
@@ -118,6 +117,8 @@ impl Publisher {
             input.pressure = sample.force.norm() / self.face_area;
             input.time = now;
             input.lateral_offset = lateral_offset(&self.thigh, &pose, self.vessel_angle);
+            input.probe_position = probe.position;
+            input.probe_orientation = probe.orientation;
         }
     }
 }
@@ -130,15 +131,19 @@ pub(super) struct ImagingThread {
 }
 
 impl ImagingThread {
-    /// Starts rendering `scenario`'s section from `shared`'s image input.
+    /// Starts rendering `scenario`'s section from `shared`'s image input:
+    /// on a patient's leg the section under the probe
+    /// ([`SectionImager`]), on the elliptic cylinder the scenario's
+    /// `[imaging.anatomy]`.
     pub(super) fn spawn(shared: Arc<Shared>, scenario: &Scenario) -> Result<Self> {
         let cfg = scenario.live_imaging_config();
+        let leg = LegSurface::new(&scenario.thigh, "thigh").context("the scenario's leg")?;
         let stop = Arc::new(AtomicBool::new(false));
         let st = stop.clone();
         let handle = std::thread::Builder::new()
             .name("imaging".into())
             .spawn(move || {
-                let r = imaging_loop(&shared, &cfg, &st);
+                let r = imaging_loop(&shared, &cfg, leg, &st);
                 if let Err(e) = &r {
                     shared.report_fault("imaging", e);
                 }
@@ -170,10 +175,14 @@ const IDLE_NAP: Duration = Duration::from_millis(200);
 
 /// The imaging thread's body: until `stop`, render a frame every 50 ms
 /// while a page looks, park while none does.
-fn imaging_loop(shared: &Shared, cfg: &ImagingConfig, stop: &AtomicBool) -> Result<()> {
+fn imaging_loop(
+    shared: &Shared,
+    cfg: &ImagingConfig,
+    leg: Option<LegSurface>,
+    stop: &AtomicBool,
+) -> Result<()> {
     let mut vein = shared.vein.load(Ordering::Relaxed);
-    let mut renderer =
-        Renderer::new(cfg, vein_of(vein)).map_err(|e| anyhow::anyhow!("imaging: {e}"))?;
+    let mut source = Source::new(shared, cfg, leg, vein_of(vein))?;
     let mut local = SectionDeformation::rest(0.04);
     let mut pixels = vec![0u8; cfg.columns * cfg.rows];
     // A fixed-rate schedule: the render's own time does not lengthen the
@@ -188,26 +197,42 @@ fn imaging_loop(shared: &Shared, cfg: &ImagingConfig, stop: &AtomicBool) -> Resu
         }
         let v = shared.vein.load(Ordering::Relaxed);
         if v != vein {
-            renderer = Renderer::new(cfg, vein_of(v))
-                .map_err(|e| anyhow::anyhow!("imaging the new vein state: {e}"))?;
+            source.set_vein(cfg, vein_of(v))?;
             vein = v;
         }
-        let (pressure, time, lateral_offset) = {
+        let input = {
             let i = shared
                 .image_input
                 .lock()
                 .map_err(|_| anyhow::anyhow!("imaging: the physics' image input is poisoned"))?;
             local.clone_from(&i.deformation);
-            (i.pressure, i.time, i.lateral_offset)
+            Probe {
+                pressure: i.pressure,
+                time: i.time,
+                lateral_offset: i.lateral_offset,
+                position: i.probe_position,
+                orientation: i.probe_orientation,
+            }
         };
-        let input = FrameInput {
+        let (renderer, lateral_offset) = source.frame(&input, vein_of(vein))?;
+        if let Some(a) = renderer.anatomy() {
+            // The drawn section's femur (the deformation falls to 0 there);
+            // kept below the deepest skin displacement, which the model's
+            // own femur bounds.
+            let deepest = local
+                .surface_displacement
+                .iter()
+                .fold(0.0f64, |m, &d| m.max(d));
+            local.bone_depth = a.femur_top().max(deepest + 1e-4);
+        }
+        let frame = FrameInput {
             deformation: &local,
-            probe_pressure: pressure,
-            time,
+            probe_pressure: input.pressure,
+            time: input.time,
             lateral_offset,
         };
         renderer
-            .render_into(&input, &mut pixels)
+            .render_into(&frame, &mut pixels)
             .map_err(|e| anyhow::anyhow!("imaging: rendering a frame: {e}"))?;
         {
             let mut slot = shared
@@ -216,7 +241,7 @@ fn imaging_loop(shared: &Shared, cfg: &ImagingConfig, stop: &AtomicBool) -> Resu
                 .map_err(|_| anyhow::anyhow!("imaging: the image slot is poisoned"))?;
             slot.pixels.copy_from_slice(&pixels);
             slot.frame += 1;
-            slot.time = time;
+            slot.time = input.time;
         }
         next += period;
         let now = Instant::now();
@@ -254,6 +279,8 @@ mod tests {
                 pressure: 0.0,
                 time: 0.0,
                 lateral_offset: 0.0,
+                probe_position: [0.0; 3],
+                probe_orientation: [1.0, 0.0, 0.0, 0.0],
             }),
             image: Mutex::new(ImageSlot {
                 pixels: Vec::new(),

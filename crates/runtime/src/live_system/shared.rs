@@ -42,8 +42,14 @@ pub(super) struct ImageInput {
     pub pressure: f64,
     /// Session time (s).
     pub time: f64,
-    /// Where the probe is relative to the vessels (m, along the skin).
+    /// Where the probe is relative to the vessels (m, along the skin), on
+    /// the elliptic cylinder (on a patient's leg the imaging thread works
+    /// it out from the probe's pose).
     pub lateral_offset: f64,
+    /// The probe face's centre the physics stepped with (m, model frame).
+    pub probe_position: [f64; 3],
+    /// The probe's orientation (w, x, y, z; model ← tool).
+    pub probe_orientation: [f64; 4],
 }
 
 /// The latest echographic frame.

@@ -1,0 +1,354 @@
+//! The live image follows the probe on the leg (issue 12): the probe's pose
+//! on the patient's leg from the device's position and orientation, and a
+//! renderer of the section under it, rebuilt from
+//! [`echothigh_anatomy::Anatomy::section`] when the probe has moved far
+//! enough for the drawn anatomy to lag, its scatterers fixed in the
+//! tissue's material coordinates ([`echothigh_imaging::MaterialWindow`]) so
+//! that the speckle stays continuous as the probe slides.
+//!
+//! Runs on the imaging thread only (a rebuild takes tens of ms; nothing
+//! here is on the physics' or the haptic tick's path).
+//!
+//! **Material coordinates of the leg** (m): elevation = `s` of the probe's
+//! face centre; lateral = `±θ r(s, θ)`, the arc from the anterior line on a
+//! circle of the local skin radius, signed along the image's lateral axis
+//! (`+` in the front half, where the image's right is increasing θ, `−`
+//! behind, see [`echothigh_anatomy::section`]).
+//!
+//! **Rebuild threshold** `δ = max(r_min / 4, Δx)`: `r_min` the smallest
+//! radius of a vessel the section cuts, `Δx` the lateral pixel pitch. Between
+//! rebuilds the drawn anatomy is panned with the probe (lateral) but not
+//! moved along the leg; a vessel's centreline runs within 45° of the leg's
+//! axis (|dc/ds| ≤ 1), so after `δ` of travel it is drawn at most `r/4`
+//! from where the section puts it, three quarters of its lumen still in
+//! place. The speckle does not wait for a rebuild: the plane moves across
+//! the slice ([`echothigh_imaging::Renderer::set_elevation`]) at every
+//! frame, within a margin of `δ`.
+
+use crate::section_image::section_anatomy;
+use anyhow::{Context, Result};
+use echothigh_anatomy::section::MAX_ANGLE;
+use echothigh_anatomy::{frame, Anatomy, ProbePose};
+use echothigh_imaging::{AnatomyConfig, ImagingConfig, MaterialWindow, Renderer, VeinState};
+use echothigh_model::{LegSurface, Vec3};
+use nalgebra::{Quaternion, UnitQuaternion};
+
+/// The probe's pose on `leg` from its face centre `position` (m, model
+/// frame) and `orientation` (w, x, y, z; model ← tool, the beam along the
+/// tool's `−y`): `s` and `θ` of the face centre (measured from the leg's
+/// axis, so a face pressed into the skin keeps its place), and the tilt of
+/// the beam out of the transverse plane (+ distally), clamped to ±60°
+/// ([`MAX_ANGLE`]); the spin about the beam is taken as 0 (the page and the
+/// simulated devices hold the image transverse). Errors when the face is
+/// beyond the leg's ends or the input is not finite.
+pub fn leg_pose(leg: &LegSurface, position: [f64; 3], orientation: [f64; 4]) -> Result<ProbePose> {
+    let p = leg.to_leg(&Vec3::from(position));
+    let s = frame::s_of(&p);
+    let theta = frame::theta_of(&p);
+    let anatomy = leg.anatomy();
+    anatomy.check_s("probe position s (m)", s)?;
+    anyhow::ensure!(
+        theta.is_finite() && orientation.iter().all(|v| v.is_finite()),
+        "the probe's position or orientation is not finite"
+    );
+    let [w, x, y, z] = orientation;
+    let q = UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z));
+    let beam = -(q * Vec3::y());
+    let plane = anatomy.image_plane(&ProbePose::transverse(s, theta))?;
+    let mut distal = plane.lateral.cross(&plane.depth);
+    if distal.z > 0.0 {
+        distal = -distal;
+    }
+    let tilt = beam
+        .dot(&distal)
+        .atan2(beam.dot(&plane.depth))
+        .clamp(-MAX_ANGLE, MAX_ANGLE);
+    Ok(ProbePose {
+        s,
+        theta,
+        tilt,
+        spin: 0.0,
+    })
+}
+
+/// Material lateral coordinate (m) of the image centre at `pose` (see the
+/// module docs).
+fn material_lateral(anatomy: &Anatomy, pose: &ProbePose) -> f64 {
+    let sign = if pose.theta.cos() >= 0.0 { 1.0 } else { -1.0 };
+    sign * pose.theta * anatomy.leg().skin_radius(pose.s, pose.theta)
+}
+
+/// The renderer of the section under the probe, rebuilt as it moves.
+#[derive(Debug)]
+pub struct SectionImager {
+    leg: LegSurface,
+    cfg: ImagingConfig,
+    vein: VeinState,
+    renderer: Renderer,
+    /// The pose the drawn anatomy was taken at.
+    built: ProbePose,
+    /// The pose of the last rebuild attempt (a failed one keeps `built`).
+    tried: ProbePose,
+    threshold: f64,
+    rebuilds: u64,
+    last_error: Option<String>,
+}
+
+impl SectionImager {
+    /// The imager of `leg` with `cfg`'s image geometry and beam and the
+    /// vein in `vein`, its first section at `pose` (where no section can be
+    /// drawn, `cfg`'s own `[imaging.anatomy]` until the probe reaches one).
+    pub fn new(
+        leg: LegSurface,
+        cfg: &ImagingConfig,
+        vein: VeinState,
+        pose: ProbePose,
+    ) -> Result<Self> {
+        let (renderer, threshold, last_error) = match Self::build(&leg, cfg, vein, &pose, None)? {
+            Outcome::Built(r, t) => (*r, t, None),
+            Outcome::Undrawable(e) => {
+                match Self::build(&leg, cfg, vein, &pose, Some(&cfg.anatomy))? {
+                    Outcome::Built(r, t) => (*r, t, Some(e)),
+                    Outcome::Undrawable(e2) => anyhow::bail!("imaging: {e2}"),
+                }
+            }
+        };
+        Ok(SectionImager {
+            leg,
+            cfg: cfg.clone(),
+            vein,
+            renderer,
+            built: pose,
+            tried: pose,
+            threshold,
+            rebuilds: 0,
+            last_error,
+        })
+    }
+
+    /// A renderer at `pose` with `anatomy`, or else the section's, and its
+    /// threshold; [`Outcome::Undrawable`] when the section's anatomy cannot
+    /// be drawn.
+    fn build(
+        leg: &LegSurface,
+        cfg: &ImagingConfig,
+        vein: VeinState,
+        pose: &ProbePose,
+        anatomy: Option<&AnatomyConfig>,
+    ) -> Result<Outcome> {
+        let leg_anatomy = leg.anatomy();
+        let dx = cfg.pixel_width();
+        let section = leg_anatomy.section(pose)?;
+        let r_min = section
+            .structures
+            .iter()
+            .filter(|x| x.kind.is_vessel())
+            .map(|x| x.ellipse.radii[0].min(x.ellipse.radii[1]))
+            .fold(f64::INFINITY, f64::min);
+        let threshold = if r_min.is_finite() {
+            (0.25 * r_min).max(dx)
+        } else {
+            dx
+        };
+        let mut c = cfg.clone();
+        // The pan only spans the travel between rebuilds (plus a column
+        // of rounding each way), which keeps the field small.
+        c.pan_range = threshold + 2.0 * dx;
+        c.anatomy = match anatomy {
+            Some(a) => a.clone(),
+            None => match section_anatomy(&cfg.anatomy, leg_anatomy, pose) {
+                Ok(a) => a,
+                Err(e) => return Ok(Outcome::Undrawable(format!("{e:#}"))),
+            },
+        };
+        let window = MaterialWindow {
+            lateral: material_lateral(leg_anatomy, pose),
+            elevation: pose.s,
+            margin: threshold,
+        };
+        let r =
+            Renderer::in_tissue(&c, vein, window).map_err(|e| anyhow::anyhow!("imaging: {e}"))?;
+        Ok(Outcome::Built(Box::new(r), threshold))
+    }
+
+    /// Follows the probe to `pose` on the calling thread: rebuilds the
+    /// section when it is [due](SectionImager::due), else moves the plane
+    /// across the slice ([`SectionImager::track`]). Returns whether it
+    /// rebuilt. A section that cannot be drawn keeps the last one (see
+    /// [`SectionImager::last_error`]).
+    pub fn follow(&mut self, pose: &ProbePose) -> Result<bool> {
+        if self.due(pose) {
+            self.mark_tried(pose);
+            let b = self.builder().build(pose, self.vein)?;
+            if self.install(b) {
+                return Ok(true);
+            }
+        }
+        self.track(pose)?;
+        Ok(false)
+    }
+
+    /// Whether the probe at `pose` has moved more than the threshold from
+    /// the drawn section and from the last attempt (along the leg, around
+    /// it, or tilted by `δ / depth`).
+    pub fn due(&self, pose: &ProbePose) -> bool {
+        let a = self.leg.anatomy();
+        let d = self.threshold;
+        let depth = self.cfg.depth;
+        let moved = |from: &ProbePose| {
+            (pose.s - from.s).abs() > d
+                || (material_lateral(a, pose) - material_lateral(a, from)).abs() > d
+                || (pose.tilt - from.tilt).abs() * depth > d
+        };
+        moved(&self.tried) && moved(&self.built)
+    }
+
+    /// Records an attempt at `pose` (a build was asked for there).
+    pub fn mark_tried(&mut self, pose: &ProbePose) {
+        self.tried = *pose;
+    }
+
+    /// What builds this imager's sections, for another thread.
+    pub fn builder(&self) -> SectionBuilder {
+        SectionBuilder {
+            leg: self.leg.clone(),
+            cfg: self.cfg.clone(),
+        }
+    }
+
+    /// Installs a section built by [`SectionBuilder::build`]: returns
+    /// whether it was drawable and for the current vein state (else it is
+    /// dropped, its error kept in [`SectionImager::last_error`]).
+    pub fn install(&mut self, b: SectionBuild) -> bool {
+        if b.vein != self.vein {
+            return false;
+        }
+        match b.outcome {
+            Outcome::Built(r, t) => {
+                self.renderer = *r;
+                self.built = b.pose;
+                self.threshold = t;
+                self.rebuilds += 1;
+                self.last_error = None;
+                true
+            }
+            Outcome::Undrawable(e) => {
+                self.last_error = Some(e);
+                false
+            }
+        }
+    }
+
+    /// Moves the image plane to the probe's `s` across the slice, within the
+    /// drawn section's margin.
+    pub fn track(&mut self, pose: &ProbePose) -> Result<()> {
+        let win = self
+            .renderer
+            .material_window()
+            .context("a material renderer")?;
+        let e = pose
+            .s
+            .clamp(win.elevation - win.margin, win.elevation + win.margin);
+        self.renderer
+            .set_elevation(e)
+            .map_err(|e| anyhow::anyhow!("imaging: {e}"))
+    }
+
+    /// The lateral offset (m) of the probe at `pose` from the drawn
+    /// section's centre, along the image's lateral axis
+    /// ([`echothigh_imaging::FrameInput::lateral_offset`]).
+    /// Whole lateral pixels, so that image column `j` always shows material
+    /// column `round(a/Δx) + j` ([`SectionImager::material_column`]),
+    /// whether the section was just rebuilt or panned.
+    pub fn lateral_offset(&self, pose: &ProbePose) -> f64 {
+        let dx = self.cfg.pixel_width();
+        (self.material_column(pose) - self.material_column(&self.built)) as f64 * dx
+    }
+
+    /// The material lateral column (lateral pixels) of the image centre at
+    /// `pose`: `round(a / Δx)`, `a` the material lateral coordinate (see
+    /// the module docs).
+    pub fn material_column(&self, pose: &ProbePose) -> i64 {
+        (material_lateral(self.leg.anatomy(), pose) / self.cfg.pixel_width()).round() as i64
+    }
+
+    /// Changes the vein state (a new renderer at the drawn pose).
+    pub fn set_vein(&mut self, vein: VeinState) -> Result<()> {
+        if vein != self.vein {
+            let drawn = self.renderer.config().anatomy.clone();
+            if let Outcome::Built(r, _) =
+                Self::build(&self.leg, &self.cfg, vein, &self.built, Some(&drawn))?
+            {
+                self.renderer = *r;
+            }
+            self.vein = vein;
+        }
+        Ok(())
+    }
+
+    /// The leg it images.
+    pub fn leg(&self) -> &LegSurface {
+        &self.leg
+    }
+
+    /// The renderer of the current section.
+    pub fn renderer(&mut self) -> &mut Renderer {
+        &mut self.renderer
+    }
+
+    /// The pose the drawn section was taken at.
+    pub fn built_pose(&self) -> ProbePose {
+        self.built
+    }
+
+    /// The rebuild threshold δ (m) of the drawn section.
+    pub fn threshold(&self) -> f64 {
+        self.threshold
+    }
+
+    /// Sections rebuilt since construction.
+    pub fn rebuilds(&self) -> u64 {
+        self.rebuilds
+    }
+
+    /// Why the last rebuild kept the previous section, if it did.
+    pub fn last_error(&self) -> Option<&str> {
+        self.last_error.as_deref()
+    }
+}
+
+/// Builds sections of one leg and image geometry (on any thread).
+#[derive(Debug, Clone)]
+pub struct SectionBuilder {
+    leg: LegSurface,
+    cfg: ImagingConfig,
+}
+
+impl SectionBuilder {
+    /// The section at `pose` with the vein in `vein` (tens to hundreds of
+    /// ms: the scatterer field is drawn anew).
+    pub fn build(&self, pose: &ProbePose, vein: VeinState) -> Result<SectionBuild> {
+        Ok(SectionBuild {
+            pose: *pose,
+            vein,
+            outcome: SectionImager::build(&self.leg, &self.cfg, vein, pose, None)?,
+        })
+    }
+}
+
+/// A section built for [`SectionImager::install`].
+#[derive(Debug)]
+pub struct SectionBuild {
+    pose: ProbePose,
+    vein: VeinState,
+    outcome: Outcome,
+}
+
+/// What [`SectionImager::build`] made.
+#[derive(Debug)]
+enum Outcome {
+    /// A renderer and its threshold (m).
+    Built(Box<Renderer>, f64),
+    /// Why the section cannot be drawn.
+    Undrawable(String),
+}
