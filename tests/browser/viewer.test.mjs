@@ -5,7 +5,9 @@
 // checks: the 3D canvas and the image canvas draw non-blank pixels; dragging
 // the probe over the thigh raises the force; the vein state switches; a
 // malformed message gets an error back and the connection stays up; one exam
-// question is answered and scored; then, at 1280×800 with the page's CPU
+// question is answered and scored; at 1280×800 and 1024×768 the 3D view,
+// the image, the gauge and the exam's answer buttons fit in the viewport
+// together (issue 19, screenshots 05-layout-*.png); then, at 1280×800 with the page's CPU
 // throttled (CDP Emulation.setCPUThrottlingRate), the lag from 50 commands to
 // their effect on the state and on the image, measured in the page, and the
 // bytes per second it receives (issue 19); last, with ECHOTHIGH_SERVER_PID
@@ -312,6 +314,44 @@ try {
       exam.last.correct === (exam.last.truth !== 'healthy') && shown.includes('the vein was'),
     `${shown} · score ${exam.correct}/${exam.answered}`);
   await page.screenshot({ path: join(shots, '03-exam.png') });
+
+  // Layout (issue 19, "fits a laptop"): at 1280×800 and 1024×768, with an
+  // exam question open (its answer buttons enabled), the 3D view, the image
+  // canvas, the gauge and the answer buttons lie inside the viewport and are
+  // not hidden behind something else or scrolled out of a panel: the point
+  // at the middle of each is the element itself (or a child of it). Before
+  // this layout, at 1280×800 the image was scrolled off the top of the right
+  // column when the exam was in view.
+  await page.click('#exam-start');
+  await until(page, () => window.echothigh.state.exam.open, null, 'an open exam question for the layout');
+  // The error toast of the malformed message above (shown 4 s) floats over
+  // the page's corner; it is transient, so the check waits for it to go.
+  await until(page, () => document.getElementById('toast').classList.contains('hidden'), null, 'the toast to hide');
+  for (const [width, height] of [[1280, 800], [1024, 768]]) {
+    await page.setViewportSize({ width, height });
+    await page.waitForTimeout(500); // a few frames for the 3D view to resize
+    const boxes = await page.evaluate((ids) => ids.map((id) => {
+      const el = document.getElementById(id);
+      const r = el.getBoundingClientRect();
+      const hit = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2);
+      return { id, left: r.left, top: r.top, right: r.right, bottom: r.bottom,
+        visible: !!hit && el.contains(hit), on: hit ? hit.id || hit.tagName : null, disabled: !!el.disabled };
+    }), ['scene', 'echo', 'gauge', 'answer-yes', 'answer-no']);
+    const vp = { width, height };
+    // Every box has a size (a collapsed canvas would be "inside" trivially)
+    // and lies within [0, width] × [0, height] of the viewport (CSS pixels).
+    const bad = boxes.filter((b) => !(b.left >= 0 && b.top >= 0 && b.right <= vp.width && b.bottom <= vp.height &&
+      b.right - b.left >= 20 && b.bottom - b.top >= 20 && b.visible));
+    await page.screenshot({ path: join(shots, `05-layout-${width}x${height}.png`) });
+    const fmt = (b) => `${b.id} [${b.left.toFixed(0)},${b.top.toFixed(0)}]–[${b.right.toFixed(0)},${b.bottom.toFixed(0)}]` +
+      (b.visible ? '' : ` hidden under ${b.on}`);
+    check(`layout ${width}×${height}: 3D view, image, gauge and answer buttons all inside the viewport`,
+      bad.length === 0 && boxes.every((b) => !b.id.startsWith('answer') || !b.disabled),
+      (bad.length ? bad : boxes).map(fmt).join('; '));
+  }
+  await page.click('#exam-stop');
+  await until(page, () => !window.echothigh.state.exam.open, null, 'the exam left after the layout check');
+  await page.setViewportSize({ width: 1440, height: 900 });
 
   // Keyboard only (issue 19): focus the 3D view (no mouse), place the probe
   // with Enter and press with W until the force rises; no mouse or pointer
