@@ -1,0 +1,15 @@
+//! The exam that teaches (issue 14): the vocabulary of a compression exam as
+//! it is recorded and scored — the findings a trainee calls, the compression
+//! events detected from the live state, the coverage of each vein in 2 cm
+//! bins, and a case's score. Kept free of the database and of the runtime:
+//! `echothigh-records` stores these types, the runtime produces them.
+//!
+//! Clinical source: `shared/reference/cus-exam-fidelity.md` §1 (protocols,
+//! positive criterion, what novices get wrong) and §3 (scoring).
+#![warn(missing_docs)]
+
+mod finding;
+mod record;
+
+pub use finding::Finding;
+pub use record::{BinState, Call, CaseScore, CompressionEvent, CoverageBin, SiteScore};
