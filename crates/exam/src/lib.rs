@@ -9,7 +9,9 @@
 #![warn(missing_docs)]
 
 mod finding;
+mod log;
 mod record;
 
 pub use finding::Finding;
+pub use log::{ExamLog, LogError, MemoryLog};
 pub use record::{BinState, Call, CaseScore, CompressionEvent, CoverageBin, SiteScore};
