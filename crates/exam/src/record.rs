@@ -36,6 +36,9 @@ pub struct CompressionEvent {
     /// with more than 1 cm of sliding is recorded as a slide, not a
     /// compress–release–step.
     pub slide: f64,
+    /// The probe force over the press, `[t (s), force (N)]`, resampled to
+    /// at most 50 Hz (the report's force trace per compression).
+    pub force_trace: Vec<[f64; 2]>,
 }
 
 /// The state of a 2 cm bin of a vein (issue 14 "Coverage").
