@@ -223,6 +223,8 @@ function toast(text) {
   clearTimeout(toastTimer);
   toastTimer = setTimeout(() => $('toast').classList.add('hidden'), 4000);
 }
+// A click dismisses the message at once.
+$('toast').addEventListener('click', () => $('toast').classList.add('hidden'));
 
 // ---- probe driving -------------------------------------------------------
 let probeDirty = false;
