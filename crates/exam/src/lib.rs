@@ -8,10 +8,20 @@
 //! positive criterion, what novices get wrong) and §3 (scoring).
 #![warn(missing_docs)]
 
+pub mod coverage;
+pub mod detector;
 mod finding;
 mod log;
+pub mod protocol;
 mod record;
+pub mod score;
 
+pub use coverage::Coverage;
+pub use detector::{EventDetector, ExamSample};
 pub use finding::Finding;
 pub use log::{ExamLog, LogError, MemoryLog};
-pub use record::{BinState, Call, CaseScore, CompressionEvent, CoverageBin, SiteScore};
+pub use protocol::{Protocol, ProtocolSite};
+pub use record::{
+    BinState, Call, CaseScore, CompressionEvent, CoverageBin, MissedSegment, SiteScore,
+};
+pub use score::{score_case, ScoreInput};

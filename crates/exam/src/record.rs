@@ -149,4 +149,23 @@ pub struct CaseScore {
     pub mean_force: f64,
     /// Per site.
     pub sites: Vec<SiteScore>,
+    /// The diseased segments the exam never examined with adequate
+    /// pressure nor called: where it missed the disease (e.g. the isolated
+    /// femoral-vein thrombus a two-point exam skips). Added by issue 14's
+    /// scorer; absent in older records (empty).
+    #[serde(default)]
+    pub missed: Vec<MissedSegment>,
+}
+
+/// A thrombosed stretch of a deep vein the exam missed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MissedSegment {
+    /// The vein (`cfv`, `fv`, `pv`).
+    pub vein: String,
+    /// Proximal end (m below the inguinal ligament).
+    pub s_start: f64,
+    /// Distal end (m).
+    pub s_end: f64,
+    /// The truth there.
+    pub truth: Finding,
 }
