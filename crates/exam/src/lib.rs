@@ -8,6 +8,7 @@
 //! positive criterion, what novices get wrong) and §3 (scoring).
 #![warn(missing_docs)]
 
+pub mod case_exam;
 pub mod coverage;
 pub mod detector;
 mod finding;
@@ -16,6 +17,7 @@ pub mod protocol;
 mod record;
 pub mod score;
 
+pub use case_exam::{CaseExam, CaseExamError};
 pub use coverage::Coverage;
 pub use detector::{EventDetector, ExamSample};
 pub use finding::Finding;

@@ -1,0 +1,219 @@
+//! One case examined live (issue 14): the protocol's checklist on the
+//! case's leg, the event detector fed from the live state, the coverage
+//! strip, the trainee's calls, and the score at the end — each record sent
+//! to the [`ExamLog`] the moment it exists (an event when its press ends, a
+//! call when it is made, the score when the case is finished), so that a
+//! crash loses nothing already done.
+
+use crate::coverage::Coverage;
+use crate::detector::{DetectorError, EventDetector, ExamSample};
+use crate::score::{score_case, truth_at, ScoreInput};
+use crate::{
+    Call, CaseScore, CompressionEvent, ExamLog, Finding, LogError, Protocol, ProtocolSite,
+};
+use echothigh_anatomy::VeinTruth;
+use echothigh_cases::Case;
+
+/// Longest press whose force trace is kept at full rate (s); longer ones
+/// are decimated by the detector. A compression is held a few seconds
+/// (compress, release, step); a minute covers a trainee who rests on the leg.
+pub const MAX_PRESS: f64 = 60.0;
+
+/// Why a case-exam step was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum CaseExamError {
+    /// A sample was malformed (the detector names the field).
+    #[error(transparent)]
+    Sample(#[from] DetectorError),
+    /// A call named no site of the protocol.
+    #[error("no site `{site}` in the {protocol} protocol (its sites: {known})")]
+    UnknownSite {
+        /// The name given.
+        site: String,
+        /// The protocol.
+        protocol: Protocol,
+        /// The names it has.
+        known: String,
+    },
+    /// The record could not be kept.
+    #[error("recording the exam: {0}")]
+    Log(#[from] LogError),
+}
+
+/// A case under examination.
+pub struct CaseExam {
+    case: String,
+    protocol: Protocol,
+    sites: Vec<ProtocolSite>,
+    truth: Vec<VeinTruth>,
+    detector: EventDetector,
+    coverage: Coverage,
+    events: Vec<CompressionEvent>,
+    calls: Vec<Call>,
+    last_t: f64,
+    peak_force: f64,
+}
+
+impl CaseExam {
+    /// Starts examining `case` under `protocol`: every site undone, every
+    /// bin not examined.
+    pub fn new(case: &Case, protocol: Protocol) -> CaseExam {
+        CaseExam {
+            case: case.file.name.clone(),
+            protocol,
+            sites: protocol.sites(&case.anatomy),
+            truth: case.ground_truth(),
+            detector: EventDetector::new(MAX_PRESS),
+            coverage: Coverage::new(&case.anatomy),
+            events: Vec::new(),
+            calls: Vec::new(),
+            last_t: 0.0,
+            peak_force: 0.0,
+        }
+    }
+
+    /// Feeds one sample of the live state; a press that ends with it is
+    /// applied to the coverage and sent to `log`, and returned.
+    pub fn observe(
+        &mut self,
+        sample: &ExamSample,
+        log: &mut dyn ExamLog,
+    ) -> Result<Option<&CompressionEvent>, CaseExamError> {
+        let ended = self.detector.push(sample)?;
+        self.last_t = sample.t;
+        if self.detector.pressing() {
+            self.peak_force = self.peak_force.max(sample.force);
+        }
+        match ended {
+            Some(e) => self.keep_event(e, log).map(Some),
+            None => Ok(None),
+        }
+    }
+
+    fn keep_event(
+        &mut self,
+        e: CompressionEvent,
+        log: &mut dyn ExamLog,
+    ) -> Result<&CompressionEvent, CaseExamError> {
+        self.peak_force = self.peak_force.max(e.peak_force);
+        self.coverage.apply(&e);
+        self.coverage.mark_done(&mut self.sites);
+        log.event(&e)?;
+        self.events.push(e);
+        Ok(self.events.last().expect("just pushed"))
+    }
+
+    /// The trainee calls `finding` at the protocol's site `site` at time `t`
+    /// (s since the case started); a later call on a site replaces an
+    /// earlier one in the score, both are recorded.
+    pub fn call(
+        &mut self,
+        site: &str,
+        finding: Finding,
+        t: f64,
+        log: &mut dyn ExamLog,
+    ) -> Result<&Call, CaseExamError> {
+        let Some(x) = self.sites.iter().find(|x| x.name == site) else {
+            return Err(CaseExamError::UnknownSite {
+                site: site.to_string(),
+                protocol: self.protocol,
+                known: self
+                    .sites
+                    .iter()
+                    .map(|x| x.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            });
+        };
+        let call = Call {
+            site: x.name.clone(),
+            vein: x.vein.clone(),
+            s: x.s,
+            finding,
+            truth: truth_at(&self.truth, &x.vein, x.s).unwrap_or(Finding::Normal),
+            t,
+        };
+        log.call(&call)?;
+        self.calls.push(call);
+        Ok(self.calls.last().expect("just pushed"))
+    }
+
+    /// Ends the case at `t` (s): a press still under way is closed and
+    /// recorded, the case is scored, and the coverage and score are sent to
+    /// `log`.
+    pub fn finish(&mut self, t: f64, log: &mut dyn ExamLog) -> Result<CaseScore, CaseExamError> {
+        let t = t.max(self.last_t);
+        if let Some(e) = self.detector.finish(t) {
+            self.keep_event(e, log)?;
+        }
+        let score = score_case(&ScoreInput {
+            case: &self.case,
+            protocol: self.protocol,
+            sites: &self.sites,
+            truth: &self.truth,
+            events: &self.events,
+            calls: &self.calls,
+            coverage: &self.coverage,
+        });
+        log.finish(self.coverage.bins(), &score)?;
+        Ok(score)
+    }
+
+    /// The case's name.
+    pub fn case(&self) -> &str {
+        &self.case
+    }
+
+    /// The protocol.
+    pub fn protocol(&self) -> Protocol {
+        self.protocol
+    }
+
+    /// The checklist, each site marked done once its bin is covered.
+    pub fn sites(&self) -> &[ProtocolSite] {
+        &self.sites
+    }
+
+    /// The coverage strip so far.
+    pub fn coverage(&self) -> &Coverage {
+        &self.coverage
+    }
+
+    /// The presses so far.
+    pub fn events(&self) -> &[CompressionEvent] {
+        &self.events
+    }
+
+    /// The calls so far.
+    pub fn calls(&self) -> &[Call] {
+        &self.calls
+    }
+
+    /// The latest call at `site`, if any.
+    pub fn call_at(&self, site: &str) -> Option<Finding> {
+        self.calls
+            .iter()
+            .rev()
+            .find(|c| c.site == site)
+            .map(|c| c.finding)
+    }
+
+    /// Whether a press is under way.
+    pub fn pressing(&self) -> bool {
+        self.detector.pressing()
+    }
+
+    /// Peak probe force over the case so far (N), counting presses only.
+    pub fn peak_force(&self) -> f64 {
+        self.peak_force
+    }
+
+    /// The case's ground truth (revealed only once the case is finished).
+    pub fn truth(&self) -> &[VeinTruth] {
+        &self.truth
+    }
+}
+
+#[cfg(test)]
+#[path = "case_exam_tests.rs"]
+mod tests;

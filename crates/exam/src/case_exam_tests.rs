@@ -1,0 +1,204 @@
+//! `CaseExam` on a shipped case with synthetic live samples.
+
+use super::*;
+use crate::{BinState, MemoryLog};
+use echothigh_cases::builtin;
+
+fn case(name: &str) -> Case {
+    builtin(name).unwrap()
+}
+
+/// One press at `(vein, s)`: force ramps 0 → `peak` → 0 over 2 s at 50 Hz,
+/// the vein's ratio falling linearly with force to `vein_min` at the peak,
+/// the artery's to `artery_min`.
+#[allow(clippy::too_many_arguments)] // a press is its eight numbers
+fn press(
+    x: &mut CaseExam,
+    log: &mut MemoryLog,
+    t0: f64,
+    vein: &'static str,
+    s: f64,
+    peak: f64,
+    vein_min: f64,
+    artery_min: f64,
+) -> f64 {
+    let n = 100;
+    for k in 0..=n {
+        let u = k as f64 / n as f64;
+        let f = peak * (1.0 - (2.0 * u - 1.0).abs());
+        let w = f / peak;
+        let sample = ExamSample {
+            t: t0 + 2.0 * u,
+            force: f,
+            skin: [s, 0.0],
+            vein: Some(vein),
+            s,
+            vein_ratio: 1.0 - w * (1.0 - vein_min),
+            artery_ratio: 1.0 - w * (1.0 - artery_min),
+        };
+        x.observe(&sample, log).unwrap();
+    }
+    t0 + 2.0
+}
+
+#[test]
+fn presses_mark_the_checklist_and_calls_score_against_the_truth() {
+    let c = case("isolated-fv-mid-acute");
+    let mut x = CaseExam::new(&c, Protocol::ThreePoint);
+    let mut log = MemoryLog::default();
+    let names: Vec<String> = x.sites().iter().map(|s| s.name.clone()).collect();
+    assert_eq!(names, ["cfv", "fv-mid", "popliteal"]);
+    let site = |x: &CaseExam, n: &str| x.sites().iter().find(|s| s.name == n).unwrap().clone();
+    let (cfv, mid, pop) = (site(&x, "cfv"), site(&x, "fv-mid"), site(&x, "popliteal"));
+    let vein =
+        |v: &str| -> &'static str { ["cfv", "fv", "pv"].into_iter().find(|n| *n == v).unwrap() };
+    // CFV closes (0.02 < 0.1), the thrombosed mid-thigh FV stays open with
+    // the artery deformed (0.85 < 0.9: adequate), the popliteal is pressed
+    // too lightly (neither criterion).
+    let mut t = press(
+        &mut x,
+        &mut log,
+        0.0,
+        vein(&cfv.vein),
+        cfv.s,
+        10.0,
+        0.02,
+        0.95,
+    );
+    t = press(
+        &mut x,
+        &mut log,
+        t + 1.0,
+        vein(&mid.vein),
+        mid.s,
+        18.0,
+        0.9,
+        0.85,
+    );
+    t = press(
+        &mut x,
+        &mut log,
+        t + 1.0,
+        vein(&pop.vein),
+        pop.s,
+        3.0,
+        0.7,
+        0.99,
+    );
+    assert_eq!(log.events.len(), 3, "one event per press");
+    assert_eq!(
+        x.events(),
+        &log.events[..],
+        "the log saw every event as it ended"
+    );
+    let done: Vec<bool> = x.sites().iter().map(|s| s.done).collect();
+    assert_eq!(done, [true, true, false], "the light press covers nothing");
+    let states: Vec<BinState> = log
+        .events
+        .iter()
+        .map(|e| {
+            x.coverage().bins()[x
+                .coverage()
+                .bin_at(e.vein.as_deref().unwrap(), e.s)
+                .unwrap()]
+            .state
+        })
+        .collect();
+    assert_eq!(
+        states,
+        [
+            BinState::Closed,
+            BinState::NotClosed,
+            BinState::InadequatePressure
+        ]
+    );
+    // Peak of the three presses (the ramp reaches its peak exactly at u = ½).
+    assert!((x.peak_force() - 18.0).abs() < 1e-9, "{}", x.peak_force());
+
+    x.call("cfv", Finding::Normal, t, &mut log).unwrap();
+    x.call("fv-mid", Finding::Normal, t, &mut log).unwrap();
+    // Changing one's mind: the later call counts.
+    x.call("fv-mid", Finding::AcuteDvt, t + 1.0, &mut log)
+        .unwrap();
+    x.call("popliteal", Finding::Indeterminate, t + 2.0, &mut log)
+        .unwrap();
+    assert_eq!(
+        log.calls.len(),
+        4,
+        "every call is recorded, the changed one too"
+    );
+    assert_eq!(
+        log.calls[2].truth,
+        Finding::AcuteDvt,
+        "the truth at mid-thigh FV"
+    );
+    assert_eq!(x.call_at("fv-mid"), Some(Finding::AcuteDvt));
+    let err = x
+        .call("fv-distal", Finding::Normal, t, &mut log)
+        .unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("no site `fv-distal` in the three-point protocol"),
+        "{err}"
+    );
+
+    let score = x.finish(t + 3.0, &mut log).unwrap();
+    assert_eq!(log.score.as_ref(), Some(&score));
+    assert_eq!(log.coverage, x.coverage().bins());
+    // cfv normal ✓, fv-mid acute ✓, popliteal indeterminate ✗ (truth normal).
+    assert_eq!((score.calls_correct, score.calls_total), (2, 3));
+    // Two of the protocol's three bins are covered.
+    assert!(
+        (score.coverage - 2.0 / 3.0).abs() < 1e-12,
+        "{}",
+        score.coverage
+    );
+}
+
+#[test]
+fn finishing_mid_press_records_the_press() {
+    let c = case("normal-average");
+    let mut x = CaseExam::new(&c, Protocol::TwoPoint);
+    let mut log = MemoryLog::default();
+    let cfv = x.sites()[0].clone();
+    for k in 0..10 {
+        let s = ExamSample {
+            t: 0.1 * k as f64,
+            force: 2.0 * k as f64,
+            skin: [cfv.s, 0.0],
+            vein: Some("cfv"),
+            s: cfv.s,
+            vein_ratio: 0.05,
+            artery_ratio: 1.0,
+        };
+        x.observe(&s, &mut log).unwrap();
+    }
+    assert!(x.pressing());
+    x.finish(1.0, &mut log).unwrap();
+    assert_eq!(
+        log.events.len(),
+        1,
+        "the press under way at the end is kept"
+    );
+    assert!((log.events[0].peak_force - 18.0).abs() < 1e-12);
+    assert!(log.events[0].coapted);
+}
+
+#[test]
+fn a_malformed_sample_is_refused_naming_the_field() {
+    let c = case("normal-average");
+    let mut x = CaseExam::new(&c, Protocol::TwoPoint);
+    let mut log = MemoryLog::default();
+    let s = ExamSample {
+        t: 0.0,
+        force: f64::NAN,
+        skin: [0.0, 0.0],
+        vein: None,
+        s: 0.0,
+        vein_ratio: 1.0,
+        artery_ratio: 1.0,
+    };
+    let err = x.observe(&s, &mut log).unwrap_err().to_string();
+    assert!(err.contains("force"), "{err}");
+    assert!(log.events.is_empty());
+}
