@@ -341,6 +341,14 @@ pub trait LiveControl: Send + Sync {
     /// block for a restart of the threads (tens of ms): an async caller runs
     /// it off its executor.
     fn command(&self, cmd: LiveCommand) -> Result<(), String>;
+    /// Loads `case` (issue 13: its patient's leg, its thrombus segments), or
+    /// the scenario's own thigh for `None`, and restarts the simulation on
+    /// it with the probe lifted. May block for the rebuild (an async caller
+    /// runs it off its executor). A runtime without cases refuses.
+    fn set_case(&self, case: Option<&echothigh_cases::Case>) -> Result<(), String> {
+        let _ = case;
+        Err("this live runtime cannot load cases".into())
+    }
     /// A page started looking at the live state (the image is rendered only
     /// while at least one looks). Each call is paired with [`Self::page_closed`].
     fn page_opened(&self) {}

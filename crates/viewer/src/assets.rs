@@ -44,6 +44,11 @@ pub const ASSETS: &[Asset] = &[
         body: include_bytes!("../assets/web/panels.js"),
     },
     Asset {
+        path: "/exam.js",
+        content_type: JS,
+        body: include_bytes!("../assets/web/exam.js"),
+    },
+    Asset {
         path: "/vendor/three.module.min.js",
         content_type: JS,
         body: include_bytes!("../assets/web/vendor/three.module.min.js"),

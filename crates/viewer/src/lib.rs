@@ -9,6 +9,7 @@
 
 mod assets;
 mod exam;
+pub mod exam_status;
 #[cfg(test)]
 mod fake;
 mod frames;
@@ -27,6 +28,8 @@ use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::path::PathBuf;
 use std::sync::Arc;
 
+pub use exam::sink::{CaseLog, MemorySink, RecordSink};
+pub use exam::{ExamPlan, ExamSession};
 pub use server::ServerConfig;
 
 /// Arguments of `echothigh view`.
@@ -84,8 +87,17 @@ pub fn url(addr: SocketAddr) -> String {
 }
 
 /// Runs the viewer until Ctrl-C: starts the live system (`runtime::live_system`)
-/// from the scenario, serves it, and stops its threads on the way out.
+/// from the scenario, serves it, and stops its threads on the way out. Its
+/// exam mode is anonymous practice over the built-in case library.
 pub fn run(args: Args) -> Result<()> {
+    let plan = exam::ExamPlan::practice(rand::random())?;
+    let session = exam::ExamSession::new(plan, Box::new(exam::sink::MemorySink::default()), true);
+    run_with(args, session)
+}
+
+/// Runs the viewer with `session` as its exam session (the `exam` command
+/// passes a trainee's plan and a database sink).
+pub fn run_with(args: Args, session: ExamSession) -> Result<()> {
     check_bind(args.bind, args.allow_remote)?;
     check_rate(args.rate)?;
     let idle_timeout = check_idle_timeout(args.idle_timeout)?;
@@ -102,7 +114,7 @@ pub fn run(args: Args) -> Result<()> {
         .enable_all()
         .build()
         .context("starting the web server's async runtime")
-        .and_then(|rt| rt.block_on(serve(control, addr, config, shutdown_signal())));
+        .and_then(|rt| rt.block_on(serve(control, addr, config, session, shutdown_signal())));
     let stopped = system.shutdown().context("stopping the live simulation");
     served.and(stopped)
 }
@@ -119,6 +131,7 @@ pub async fn serve(
     control: Arc<dyn LiveControl>,
     addr: SocketAddr,
     config: ServerConfig,
+    session: ExamSession,
     shutdown: impl std::future::Future<Output = ()> + Send + 'static,
 ) -> Result<()> {
     let listener = tokio::net::TcpListener::bind(addr)
@@ -129,24 +142,28 @@ pub async fn serve(
     writeln!(stdout, "echothigh viewer: {}", url(local))?;
     stdout.flush()?;
     tracing::info!(url = %url(local), "viewer serving");
-    serve_on(listener, control, config, shutdown).await
+    serve_on(listener, control, config, session, shutdown).await
 }
 
-/// Serves on an already bound `listener` until `shutdown` resolves.
+/// Serves on an already bound `listener` until `shutdown` resolves, with
+/// the exam observer thread sampling the live state for `session`; the
+/// observer is stopped and joined, and the session's records closed, on the
+/// way out.
 pub async fn serve_on(
     listener: tokio::net::TcpListener,
     control: Arc<dyn LiveControl>,
     config: ServerConfig,
+    session: ExamSession,
     shutdown: impl std::future::Future<Output = ()> + Send + 'static,
 ) -> Result<()> {
-    let state = Arc::new(server::AppState::new(
-        control,
-        exam::ExamSession::from_entropy(),
-        config,
-    ));
+    let state = Arc::new(server::AppState::new(control, session, config));
+    let observer = exam::ExamObserver::spawn(state.clone()).context("starting the exam observer")?;
     let listener = idle::IdleListener::new(listener, config.idle_timeout);
-    axum::serve(listener, server::router(state))
+    let served = axum::serve(listener, server::router(state.clone()))
         .with_graceful_shutdown(shutdown)
         .await
-        .context("serving the viewer")
+        .context("serving the viewer");
+    observer.stop();
+    state.end_exam();
+    served
 }

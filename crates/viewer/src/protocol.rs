@@ -20,6 +20,7 @@
 //! Units: SI (m, N, s, Hz), thigh frame (z along the axis, y anterior).
 
 use echothigh_runtime::live::{LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, VeinState};
+use echothigh_exam::Finding;
 use serde::{Deserialize, Serialize};
 
 /// Version carried by every JSON envelope and binary frame header.
@@ -84,8 +85,11 @@ pub struct ViewState {
     pub status: LiveStatus,
     /// Vein state; `None` while an exam question hides it.
     pub vein: Option<VeinState>,
-    /// Exam session.
-    pub exam: ExamStatus,
+    /// The exam session, when it changed since this connection's last
+    /// state ([`ExamStatus::rev`]); absent otherwise (the page keeps the
+    /// last one it got).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub exam: Option<ExamStatus>,
     /// This tab only observes: another one drives the probe and the exam
     /// (issue 19: two tabs fought over the probe).
     pub observer: bool,
@@ -100,7 +104,11 @@ impl ViewState {
     /// The scalar state of `snap`, sanitized ([`LiveStatus::sanitized`]: a
     /// non-finite value becomes 0, so the page never sees NaN); `vein` and
     /// `exam` come from the server.
-    pub fn from_snapshot(snap: &LiveSnapshot, vein: Option<VeinState>, exam: ExamStatus) -> Self {
+    pub fn from_snapshot(
+        snap: &LiveSnapshot,
+        vein: Option<VeinState>,
+        exam: Option<ExamStatus>,
+    ) -> Self {
         Self {
             status: snap.status.sanitized(),
             vein,
@@ -112,51 +120,27 @@ impl ViewState {
     }
 }
 
-/// The exam session as the page may see it: never the hidden vein state.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-pub struct ExamStatus {
-    /// A question is open: the vein state is hidden and an answer is awaited.
-    pub open: bool,
-    /// Questions started in this session.
-    pub question: u32,
-    /// Peak contact force on the thigh since the open question started (N).
-    pub peak_force: f64,
-    /// Questions answered in this session.
-    pub answered: u32,
-    /// Questions answered correctly in this session.
-    pub correct: u32,
-    /// The last answered question, with its truth revealed.
-    pub last: Option<ExamResult>,
-}
-
-/// The outcome of one answered exam question.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct ExamResult {
-    /// Question number.
-    pub question: u32,
-    /// The trainee's answer: the vein is compressible.
-    pub answered_compressible: bool,
-    /// The hidden vein state, revealed once answered.
-    pub truth: VeinState,
-    /// Whether the answer was right (only a healthy vein is compressible).
-    pub correct: bool,
-    /// Peak contact force used during the question (N).
-    pub peak_force: f64,
-}
+pub use crate::exam_status::{CaseFeedback, ExamStatus, SiteStatus, TruthSegment};
 
 /// The viewer's own page → server commands (exam mode).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 #[allow(clippy::enum_variant_names)] // the wire names are `exam_*`
 pub enum ViewerCommand {
-    /// Draw a vein state at random, hide it, reset the tissue, open a question.
+    /// Open the session's next case (exam mode turns on): its truth stays
+    /// on the server, the live system loads its leg and thrombi.
     ExamStart,
-    /// Answer the open question.
-    ExamAnswer {
-        /// The trainee judges the vein compressible (healthy).
-        compressible: bool,
+    /// Call a finding at a site of the protocol.
+    ExamCall {
+        /// The site's name (`cfv`, `fv-mid`, `popliteal`, `fv@190mm`).
+        site: String,
+        /// The finding (`normal`, `acute_dvt`, `chronic_post_thrombotic`,
+        /// `indeterminate`).
+        finding: Finding,
     },
-    /// Leave exam mode (an open question is dropped unscored).
+    /// Finish the open case: score it and reveal its truth.
+    ExamFinish,
+    /// Leave exam mode (an open case is dropped unscored).
     ExamStop,
     /// The page has decoded and shown the last image frame it received
     /// (flow control of the images: the next one is sent only then, so
@@ -235,7 +219,8 @@ pub fn decode_client(text: &str, limits: &CommandLimits) -> Result<ClientMessage
         || ["ack", "image_ack", "take_control"].contains(&kind.as_str())
     {
         let cmd: ViewerCommand = serde_json::from_value(value.clone()).map_err(invalid)?;
-        (ClientMessage::Viewer(cmd), serde_json::to_value(cmd))
+        let known = serde_json::to_value(&cmd);
+        (ClientMessage::Viewer(cmd), known)
     } else {
         let cmd: LiveCommand = serde_json::from_value(value.clone()).map_err(invalid)?;
         let known = serde_json::to_value(&cmd);

@@ -97,6 +97,17 @@ impl AppState {
         }
     }
 
+    /// Leaves exam mode (the server is stopping): an open case stays
+    /// unfinished in the records, the session's records are closed.
+    pub(crate) fn end_exam(&self) {
+        self.exam().stop();
+    }
+
+    /// Copies the live state into `out`.
+    pub(crate) fn snapshot_into(&self, out: &mut LiveSnapshot) {
+        self.control.snapshot(out);
+    }
+
     /// The exam session (a poisoned lock is recovered: the session is plain data).
     fn exam(&self) -> MutexGuard<'_, ExamSession> {
         self.exam.lock().unwrap_or_else(|e| e.into_inner())
@@ -105,9 +116,10 @@ impl AppState {
     /// Applies one decoded page message; `Err` is the text sent back to the page.
     fn apply(&self, msg: ClientMessage) -> Result<(), String> {
         match msg {
-            ClientMessage::Live(LiveCommand::SetVein { .. }) if self.exam().is_open() => {
-                Err("the vein state is hidden during an exam question: answer it or leave the exam first".into())
-            }
+            ClientMessage::Live(LiveCommand::SetVein { .. }) if self.exam().is_open() => Err(
+                "the vein is the case's during an exam: finish the case or leave the exam first"
+                    .into(),
+            ),
             ClientMessage::Live(cmd @ LiveCommand::Probe { .. }) => {
                 self.control.command(cmd)?;
                 self.exam().trainee_pressed();
@@ -115,21 +127,22 @@ impl AppState {
             }
             ClientMessage::Live(cmd) => self.control.command(cmd),
             ClientMessage::Viewer(ViewerCommand::ExamStart) => {
-                // The exam lock is not held across the restart: the other
-                // connections' pushes read the exam status meanwhile.
-                let vein = self.exam().start();
-                let applied = self
-                    .control
-                    .command(LiveCommand::SetVein { vein })
-                    .and_then(|()| self.control.command(LiveCommand::Reset));
-                if let Err(e) = applied {
-                    self.exam().stop();
-                    return Err(format!("could not start the exam question: {e}"));
+                // The exam lock is not held across the case's loading (a
+                // rebuild of the physics): the other connections' pushes
+                // and the observer read the exam status meanwhile.
+                let case = self.exam().start().map_err(|e| e.to_string())?.clone();
+                if let Err(e) = self.control.set_case(Some(&case)) {
+                    self.exam().abandon();
+                    return Err(format!("could not load the exam's case: {e}"));
                 }
                 Ok(())
             }
-            ClientMessage::Viewer(ViewerCommand::ExamAnswer { compressible }) => {
-                self.exam().answer(compressible).map(|_| ()).map_err(|e| e.to_string())
+            ClientMessage::Viewer(ViewerCommand::ExamCall { site, finding }) => self
+                .exam()
+                .call(&site, finding)
+                .map_err(|e| e.to_string()),
+            ClientMessage::Viewer(ViewerCommand::ExamFinish) => {
+                self.exam().finish().map_err(|e| e.to_string())
             }
             ClientMessage::Viewer(ViewerCommand::ExamStop) => {
                 self.exam().stop();
@@ -142,13 +155,33 @@ impl AppState {
         }
     }
 
-    /// Builds the state message from `snap`, recording the force for the exam.
-    fn view_state(&self, snap: &LiveSnapshot) -> ViewState {
-        let [x, y, z] = snap.status.physics_force;
-        let mut exam = self.exam();
-        exam.observe_force((x * x + y * y + z * z).sqrt());
+    /// Builds the state message from `snap`; the exam status goes with it
+    /// only when it changed since `exam_rev` (the connection's last one).
+    fn view_state(&self, snap: &LiveSnapshot, exam_rev: &mut Option<u64>) -> ViewState {
+        let exam = self.exam();
         let vein = (!exam.is_open()).then(|| self.control.vein());
-        ViewState::from_snapshot(snap, vein, exam.status())
+        let status = exam.status();
+        let changed = *exam_rev != Some(status.rev);
+        *exam_rev = Some(status.rev);
+        ViewState::from_snapshot(snap, vein, changed.then(|| status.clone()))
+    }
+
+    /// Feeds the exam session one sample of `snap` taken at `now` (the
+    /// exam observer's tick): nothing while no case is open or the trainee
+    /// has not moved the probe, or before the imaging thread's first
+    /// reading of the section.
+    pub(crate) fn observe_exam(&self, snap: &LiveSnapshot, now: std::time::Instant) {
+        let mut exam = self.exam();
+        let Some(t) = exam.case_time(now) else {
+            return;
+        };
+        let Some(sample) = super::exam::sample(&snap.status, t) else {
+            return;
+        };
+        if let Err(e) = exam.observe(&sample) {
+            tracing::warn!("exam sample: {e}");
+            exam.report(e.to_string());
+        }
     }
 }
 
@@ -298,6 +331,8 @@ struct Conn {
     epoch: tokio::time::Instant,
     snap: LiveSnapshot,
     pixels: Vec<u8>,
+    /// The exam status's revision last sent on this connection.
+    exam_rev: Option<u64>,
 }
 
 impl Conn {
@@ -312,6 +347,7 @@ impl Conn {
             epoch: tokio::time::Instant::now(),
             snap: LiveSnapshot::default(),
             pixels: Vec::new(),
+            exam_rev: None,
         }
     }
 }
@@ -417,7 +453,7 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
     }
     app.control.snapshot(&mut conn.snap);
     conn.sent += 1;
-    let mut state = app.view_state(&conn.snap);
+    let mut state = app.view_state(&conn.snap, &mut conn.exam_rev);
     state.seq = conn.sent;
     state.observer = !app.drives(conn.id, false);
     let state = json(ServerMessage::State(state));

@@ -4,6 +4,7 @@
 // with a 16-byte header "ETHV", version, kind, a, b).
 import { ThighScene } from './scene.js';
 import { EchoView, ForcePlot, Gauge, norm, showStatus } from './panels.js';
+import { showExam } from './exam.js';
 
 const PROTOCOL_VERSION = 1;
 const FRAME_IMAGE = 1;
@@ -21,7 +22,7 @@ const $ = (id) => document.getElementById(id);
 // What the page knows, readable by tests and the console.
 const live = {
   connected: false, hello: null, state: null, lastError: null, errors: 0,
-  imageFrames: 0, surfaceFrames: 0, imageTime: null, bytes: 0,
+  exam: null, imageFrames: 0, surfaceFrames: 0, imageTime: null, bytes: 0,
   // Called as fn(kind, performance.now(), detail) on every state ('state',
   // the message) and image ('image', its simulated time): for measurements.
   listeners: [],
@@ -158,6 +159,8 @@ async function decodeGray(blob, w, h) {
 // ---- state ---------------------------------------------------------------
 let renderedFps = 0;
 function onState(s) {
+  // The exam status comes only when it changed: keep the last one.
+  if (s.exam) live.exam = s.exam; else s.exam = live.exam;
   live.state = s;
   // Flow control: the server sends the next state once this one is taken.
   send({ type: 'ack', seq: s.seq });
@@ -169,7 +172,7 @@ function onState(s) {
   if (scene) scene.updateState(s);
   showStatus(s, renderedFps);
   syncControls(s);
-  showExam(s.exam);
+  showExam(s.exam, s.level_s, send);
   $('observer').hidden = !s.observer;
   showBehind(s);
 }
@@ -199,21 +202,6 @@ function syncControls(s) {
     $('latency-v').textContent = (s.latency_setting * 1000).toFixed(0);
   }
   $('play').textContent = s.exam_playing ? 'Stop scripted exam' : 'Play scripted exam';
-}
-
-function showExam(e) {
-  $('exam-start').textContent = e.question > 0 && !e.open ? 'Next question' : 'Start a question';
-  $('exam-start').disabled = e.open;
-  $('answer-yes').disabled = $('answer-no').disabled = !e.open;
-  $('exam-stop').disabled = !e.open;
-  $('exam-status').textContent = e.question === 0 ? '' :
-    `question ${e.question}${e.open ? ` · peak force ${e.peak_force.toFixed(1)} N` : ''} · ` +
-    `session score ${e.correct} / ${e.answered}`;
-  const r = e.last;
-  $('exam-result').textContent = r ? `Q${r.question}: ${r.correct ? 'correct' : 'wrong'} — the vein was ` +
-    `${r.truth} (${r.truth === 'healthy' ? 'compressible' : 'not compressible'}); peak force used ` +
-    `${r.peak_force.toFixed(1)} N` : '';
-  $('exam-result').className = r ? (r.correct ? 'right' : 'wrong') : '';
 }
 
 let toastTimer = null;
@@ -327,8 +315,7 @@ $('play').addEventListener('click', () => {
   send({ type: live.state && live.state.exam_playing ? 'stop_exam' : 'play_exam' });
 });
 $('exam-start').addEventListener('click', () => { live.probe.placed = false; send({ type: 'exam_start' }); });
-$('answer-yes').addEventListener('click', () => send({ type: 'exam_answer', compressible: true }));
-$('answer-no').addEventListener('click', () => send({ type: 'exam_answer', compressible: false }));
+$('exam-finish').addEventListener('click', () => send({ type: 'exam_finish' }));
 $('exam-stop').addEventListener('click', () => send({ type: 'exam_stop' }));
 $('take-control').addEventListener('click', () => send({ type: 'take_control' }));
 

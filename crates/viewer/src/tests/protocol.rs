@@ -44,20 +44,46 @@ pub(super) fn sample_state() -> ViewState {
         ..Default::default()
     };
     let exam = ExamStatus {
-        open: false,
-        question: 2,
-        peak_force: 0.0,
-        answered: 2,
-        correct: 1,
-        last: Some(ExamResult {
-            question: 2,
-            answered_compressible: true,
-            truth: VeinState::Chronic,
-            correct: false,
-            peak_force: 12.5,
+        rev: 7,
+        active: true,
+        trainee: Some("ada".into()),
+        protocol: "two-point".into(),
+        recording: "not recorded (practice)".into(),
+        case_number: 2,
+        cases_total: 3,
+        cases_done: 2,
+        calls_correct: 3,
+        calls_total: 4,
+        last: Some(CaseFeedback {
+            case: "popliteal-acute".into(),
+            title: "Popliteal thrombus".into(),
+            diagnosis: "acute_dvt".into(),
+            teaching: None,
+            score: echothigh_exam::CaseScore {
+                case: "popliteal-acute".into(),
+                protocol: "two-point".into(),
+                coverage: 1.0,
+                calls_correct: 2,
+                calls_total: 2,
+                pressure_adequate: 1.0,
+                excessive_force_on_tail: 0,
+                duration: 61.5,
+                peak_force: 14.0,
+                mean_force: 6.5,
+                sites: Vec::new(),
+                missed: Vec::new(),
+            },
+            truth: vec![TruthSegment {
+                vein: "pv".into(),
+                s_start: 0.33,
+                s_end: 0.37,
+                kind: "acute_occlusive".into(),
+            }],
+            coverage: Vec::new(),
         }),
+        ..ExamStatus::default()
     };
-    ViewState::from_snapshot(&snap, Some(VeinState::Acute), exam)
+    ViewState::from_snapshot(&snap, Some(VeinState::Acute), Some(exam))
 }
 
 #[test]
@@ -69,7 +95,7 @@ fn state_message_is_versioned_typed_and_round_trips() {
     assert_eq!(value["type"], "state");
     assert_eq!(value["mode"], "hold");
     assert_eq!(value["vein"], "acute");
-    assert_eq!(value["exam"]["last"]["truth"], "chronic");
+    assert_eq!(value["exam"]["last"]["truth"][0]["kind"], "acute_occlusive");
     let back: Envelope = serde_json::from_str(&text).unwrap();
     assert_eq!(back.v, PROTOCOL_VERSION);
     match back.body {
@@ -116,7 +142,7 @@ fn non_finite_snapshot_values_never_reach_the_page() {
         },
         ..Default::default()
     };
-    let state = ViewState::from_snapshot(&snap, None, ExamStatus::default());
+    let state = ViewState::from_snapshot(&snap, None, None);
     let s = state.status;
     assert_eq!(
         (s.time, s.rendered_force, s.model_age, s.missed_deadlines),
@@ -229,9 +255,10 @@ fn every_command_decodes_from_its_json() {
         }))
     );
     assert_eq!(
-        decode_client(r#"{"type":"exam_answer","compressible":true}"#),
-        Ok(ClientMessage::Viewer(ViewerCommand::ExamAnswer {
-            compressible: true
+        decode_client(r#"{"type":"exam_call","site":"fv-mid","finding":"acute_dvt"}"#),
+        Ok(ClientMessage::Viewer(ViewerCommand::ExamCall {
+            site: "fv-mid".into(),
+            finding: echothigh_exam::Finding::AcuteDvt
         }))
     );
 }
@@ -273,7 +300,8 @@ fn wrong_shapes_are_refused_naming_the_type() {
         r#"{"type":"set_vein","vein":"purple"}"#,
         r#"{"type":"set_mode","mode":"Buffer"}"#,
         r#"{"type":"reset","now":true}"#,
-        r#"{"type":"exam_answer","compressible":"yes"}"#,
+        r#"{"type":"exam_call","site":"cfv","finding":"thrombus"}"#,
+        r#"{"type":"exam_call","site":"cfv"}"#,
         r#"{"type":"exam_start","vein":"healthy"}"#,
         r#"{"type":"set_physics_rate","hz":1e400}"#,
     ];
@@ -457,7 +485,7 @@ proptest! {
 
     #[test]
     fn random_json_objects_never_panic(
-        kind in prop_oneof![Just("probe".to_owned()), Just("set_vein".to_owned()), Just("exam_answer".to_owned()), Just("set_latency".to_owned()), "[a-z_]{0,12}"],
+        kind in prop_oneof![Just("probe".to_owned()), Just("set_vein".to_owned()), Just("exam_call".to_owned()), Just("set_latency".to_owned()), "[a-z_]{0,12}"],
         key in "[a-z_]{1,10}",
         num in any::<f64>(),
         s in "\\PC{0,8}",
