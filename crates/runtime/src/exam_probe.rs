@@ -26,7 +26,9 @@ pub struct Look {
     /// Artery lumen area over rest.
     pub artery_ratio: f64,
     /// Where the image cuts the leg (m below the inguinal ligament), on the
-    /// case's leg.
+    /// case's leg: the section drawn at the site (the probe's drift under
+    /// the press, a few mm, is in `skin`, and the section is not redrawn
+    /// for it).
     pub s: f64,
     /// The probe's face centre on the skin: `[s, arc around the leg from
     /// the site]` (m).
@@ -128,7 +130,7 @@ impl SiteProbe {
         Ok(Look {
             vein_ratio: l.vein.area / l.vein.rest_area,
             artery_ratio: l.artery.area / l.artery.rest_area,
-            s: at.s + self.s_shift,
+            s: self.site_pose.s,
             skin: [at.s + self.s_shift, offset],
         })
     }

@@ -36,7 +36,7 @@ use anyhow::{Context, Result};
 use echothigh_anatomy::{Patient, VeinTruth};
 use echothigh_cases::Case;
 use echothigh_exam::coverage::event_state;
-use echothigh_exam::score::truth_at;
+use echothigh_exam::score::truth_for_call;
 use echothigh_exam::{
     score_case, BinState, Call, CaseScore, CompressionEvent, ExamLog, Finding, ProtocolSite,
     ScoreInput,
@@ -54,6 +54,9 @@ pub struct ExamOutcome {
     /// Sites pressed, and the physics' press point of each (m): the site's
     /// own `s`, or the nearest point [`END_MARGIN`] inside the mesh.
     pub pressed: Vec<(ProtocolSite, f64)>,
+    /// Sites the trainee could not image (the renderer cannot draw any
+    /// section within 9.5 mm of them), and why: not pressed, not called.
+    pub unexaminable: Vec<(ProtocolSite, String)>,
     /// Lumen looks made.
     pub looks: u64,
 }
@@ -94,10 +97,11 @@ pub fn run_exam(script: &TraineeScript, case: &Case, log: &mut dyn ExamLog) -> R
     let mut w = Walker::new(&scenario, script, case)?;
     let truth = case.ground_truth();
     let mut pressed = Vec::new();
+    let mut unexaminable = Vec::new();
     let mut calls = Vec::new();
     for site in sites.iter().filter(|x| !script.skip.contains(&x.name)) {
         let first = w.events.len();
-        let s_phys = w.press_site(site, case).with_context(|| {
+        let pressed_at = w.press_site(site, case).with_context(|| {
             format!(
                 "pressing site {} ({} at {:.0} mm)",
                 site.name,
@@ -105,6 +109,13 @@ pub fn run_exam(script: &TraineeScript, case: &Case, log: &mut dyn ExamLog) -> R
                 site.s * 1e3
             )
         })?;
+        let s_phys = match pressed_at {
+            Ok(s) => s,
+            Err(why) => {
+                unexaminable.push((site.clone(), why));
+                continue;
+            }
+        };
         pressed.push((site.clone(), s_phys));
         for e in &w.events[first..] {
             log.event(e).map_err(|e| anyhow::anyhow!("exam log: {e}"))?;
@@ -150,6 +161,7 @@ pub fn run_exam(script: &TraineeScript, case: &Case, log: &mut dyn ExamLog) -> R
         virtual_time: w.run.time(),
         ticks: w.ticks,
         pressed,
+        unexaminable,
         looks: w.looks,
     })
 }
@@ -175,14 +187,15 @@ pub fn honest_call(events: &[CompressionEvent], site: &ProtocolSite) -> Option<F
         })
 }
 
-/// A call at `site` at time `t` (s), with the truth there.
+/// A call at `site` at time `t` (s), with the truth it is scored against
+/// ([`truth_for_call`]).
 fn make_call(site: &ProtocolSite, finding: Finding, truth: &[VeinTruth], t: f64) -> Call {
     Call {
         site: site.name.clone(),
         vein: site.vein.clone(),
         s: site.s,
         finding,
-        truth: truth_at(truth, &site.vein, site.s).unwrap_or(Finding::Normal),
+        truth: truth_for_call(truth, &site.vein, site.s, Some(finding)),
         t,
     }
 }

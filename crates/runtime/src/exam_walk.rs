@@ -39,9 +39,10 @@ const MOVE_SPEED: f64 = 0.2;
 const WAYPOINT: (f64, f64) = (0.02, 0.1);
 /// Longest a phase may last (s) before the walk stops with an error.
 const PHASE_TIMEOUT: f64 = 10.0;
-/// How far along its vein the trainee may slide to find a drawable window
-/// when the site's own section cannot be drawn (m): half the site spacing.
-const SEARCH: f64 = 0.01;
+/// How far along its vein the trainee may move to find a drawable window
+/// when the site's own section cannot be drawn (m): under half the site
+/// spacing, so the window stays in the site's bin.
+const SEARCH: f64 = 0.0095;
 
 /// The probe's place on the physics' leg: `s`, θ, tilt.
 type Place = (f64, f64, f64);
@@ -112,16 +113,20 @@ impl<'a> Walker<'a> {
 
     /// The site's probe: the section at the site, or — when the renderer
     /// cannot draw it — the nearest drawable one within [`SEARCH`] along
-    /// the vein (2.5 mm steps), as a sonographer moves to find a window.
+    /// the vein (0.5 mm steps), as a sonographer moves to find a window.
+    /// `Err(reason)` inside `Ok` when no window is drawable there.
     fn site_probe(
         &self,
         site: &ProtocolSite,
         case: &Case,
         vein: StructureId,
-    ) -> Result<(ProbePose, SiteProbe)> {
+    ) -> Result<std::result::Result<(ProbePose, SiteProbe), String>> {
         let mut first_error = None;
-        for k in [0.0, 1.0, -1.0, 2.0, -2.0, 3.0, -3.0, 4.0, -4.0] {
-            let s = site.s + k * 0.25 * SEARCH;
+        // Nearest first: 0, +0.5, −0.5, +1, … ±9.5 mm; the window stays
+        // inside the site's 2 cm bin.
+        let steps = (0..39).map(|i| if i % 2 == 1 { (i + 1) / 2 } else { -(i / 2) });
+        for k in steps {
+            let s = site.s + f64::from(k) * 0.5e-3;
             let Ok(pose) = case.anatomy.pose_over(s, vein) else {
                 continue;
             };
@@ -131,37 +136,39 @@ impl<'a> Walker<'a> {
                 .hand_target(s_phys, pose.theta, 0.0, pose.tilt)?
                 .orientation;
             let q = q.quaternion();
-            match SiteProbe::new(
-                &self.imaging,
-                &case.anatomy,
-                &case.thrombi,
-                pose,
-                s_phys,
-                [q.w, q.i, q.j, q.k],
-            ) {
-                Ok(p) => return Ok((pose, p)),
+            let orientation = [q.w, q.i, q.j, q.k];
+            let (a, t) = (&case.anatomy, &case.thrombi);
+            match SiteProbe::new(&self.imaging, a, t, pose, s_phys, orientation) {
+                Ok(p) => return Ok(Ok((pose, p))),
                 Err(e) => {
-                    first_error.get_or_insert(e);
+                    first_error.get_or_insert(format!("{e:#}"));
                 }
             }
         }
-        Err(first_error
-            .unwrap_or_else(|| anyhow::anyhow!("the vein does not exist there"))
-            .context(format!(
-                "no drawable section within {} mm of the site",
-                SEARCH * 1e3
-            )))
+        Ok(Err(format!(
+            "no drawable section within {:.1} mm of the site: {}",
+            SEARCH * 1e3,
+            first_error.unwrap_or_else(|| "the vein does not exist there".into())
+        )))
     }
 
     /// Travels to `site`, presses by the script's policy, holds, releases.
-    /// Returns the physics' press point `s` (m).
-    pub fn press_site(&mut self, site: &ProtocolSite, case: &Case) -> Result<f64> {
+    /// Returns the physics' press point `s` (m), or why the site cannot be
+    /// imaged (then nothing was done).
+    pub fn press_site(
+        &mut self,
+        site: &ProtocolSite,
+        case: &Case,
+    ) -> Result<std::result::Result<f64, String>> {
         let vein = match site.vein.as_str() {
             "cfv" => StructureId::Cfv,
             "fv" => StructureId::Fv,
             _ => StructureId::Pv,
         };
-        let (pose, probe) = self.site_probe(site, case, vein)?;
+        let (pose, probe) = match self.site_probe(site, case, vein)? {
+            Ok(x) => x,
+            Err(why) => return Ok(Err(why)),
+        };
         let s_phys = pose.s.clamp(self.segment.0, self.segment.1);
         let place = (s_phys, pose.theta, pose.tilt);
         let skin = self.leg.hand_target(s_phys, pose.theta, 0.0, pose.tilt)?;
@@ -176,7 +183,7 @@ impl<'a> Walker<'a> {
         self.travel(place, &mut here)?;
         self.press(&mut here)?;
         self.at = Some(place);
-        Ok(s_phys)
+        Ok(Ok(s_phys))
     }
 
     /// Moves the probe through the air, [`CLEARANCE`] off the skin, from

@@ -48,6 +48,9 @@ fn walk(script: &TraineeScript, case: &str) -> (ExamOutcome, MemoryLog) {
             e.slide * 1e3
         );
     }
+    for (x, why) in &out.unexaminable {
+        eprintln!("  NOT IMAGEABLE {}: {why}", x.name);
+    }
     for c in &log.calls {
         eprintln!("  call {}: {:?} (truth {:?})", c.site, c.finding, c.truth);
     }
@@ -114,4 +117,32 @@ fn light_pressure_is_inadequate_not_non_compressible() {
     assert!(s.sites.iter().all(|x| !x.called_without_adequate_pressure));
     assert_eq!(s.pressure_adequate, 0.0);
     assert_eq!(s.coverage, 0.0);
+}
+
+/// The thorough trainee (whole-leg, a press every 2 cm until the artery
+/// deforms or the walls meet, up to 20 N, honest calls) on the average
+/// normal leg: every bin covered and every call right.
+#[test]
+fn thorough_trainee_on_a_normal_leg_covers_everything_and_calls_it_right() {
+    let (out, log) = walk(&script("exam-thorough"), "normal-average");
+    let s = &out.score;
+    assert_eq!(s.coverage, 1.0, "{:?}", log.coverage);
+    assert_eq!(s.calls_correct, s.calls_total);
+    assert!(s.missed.is_empty());
+}
+
+/// The thorough trainee on the isolated FV thrombus (FV 170–230 mm): every
+/// bin covered, every call right — acute DVT at the sites inside the
+/// thrombus, normal elsewhere — and nothing missed.
+#[test]
+fn thorough_trainee_finds_the_isolated_fv_thrombus() {
+    let (out, log) = walk(&script("exam-thorough"), "isolated-fv-mid-acute");
+    let s = &out.score;
+    assert_eq!(s.coverage, 1.0, "{:?}", log.coverage);
+    assert_eq!(s.calls_correct, s.calls_total);
+    assert!(s.missed.is_empty(), "{:?}", s.missed);
+    assert!(log
+        .calls
+        .iter()
+        .any(|c| c.finding == Finding::AcuteDvt && c.vein == "fv"));
 }
