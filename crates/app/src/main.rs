@@ -46,6 +46,8 @@ enum Command {
     /// The trainee's live web viewer (3D thigh, probe, image, force, exam mode).
     #[cfg(feature = "viewer")]
     View(echothigh_viewer::Args),
+    /// The scripted trainee (issue 14): an exam script on a case, headless on the virtual clock, and its score.
+    Exam(cmd::exam::Args),
     /// List the real haptic-device backends: SDK found, devices, limits, or why not.
     Devices(cmd::devices::Args),
 }
@@ -72,6 +74,7 @@ fn main() -> std::process::ExitCode {
         Command::Anatomy(a) => cmd::anatomy::run(a),
         Command::Cases(c) => cmd::cases::run(c),
         Command::Devices(a) => cmd::devices::run(a),
+        Command::Exam(a) => cmd::exam::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -6,9 +6,9 @@
 //!   then the popliteal vein (SRU consensus, Needleman et al. 2018).
 //! - **three-point**: adds the femoral vein at mid-thigh.
 //! - **whole-leg**: every [`WHOLE_LEG_SPACING`] along the deep veins
-//!   (cfv → fv → pv) from the inguinal ligament (`s = 0`) to the popliteal
-//!   trifurcation — in this model the distal end of the popliteal vein's
-//!   tube, just below the knee, where the leg model ends.
+//!   (cfv → fv → pv) from the inguinal ligament (`s = 0`) towards the
+//!   popliteal trifurcation — in this model to the knee joint line, see
+//!   [`whole_leg_range`].
 //!
 //! Lengths in metres below the inguinal ligament.
 
@@ -114,26 +114,27 @@ pub fn site_name(vein: &str, s: f64) -> String {
 }
 
 /// The stretch of the deep-vein path the whole-leg protocol covers (m):
-/// from the inguinal ligament (`s = 0`) to the popliteal trifurcation, the
-/// distal end of the popliteal vein's tube, cut to whole
-/// [`WHOLE_LEG_SPACING`] bins (a last partial bin shorter than half a bin
-/// is dropped: the probe's 10 mm elevation already reaches into it from the
-/// bin before).
+/// from the inguinal ligament (`s = 0`) towards the popliteal
+/// trifurcation, in whole [`WHOLE_LEG_SPACING`] bins (a last partial bin is
+/// dropped). The trifurcation lies a few centimetres below the knee joint
+/// line, where this leg model's popliteal vein ends; but the section there
+/// cannot be imaged (the image model is built over the femur, which ends
+/// at the joint line, `Levels::knee`), so the walk stops at the joint line:
+/// the last bins of the popliteal vein below it are not part of the
+/// protocol in this model.
 pub fn whole_leg_range(anatomy: &Anatomy) -> (f64, f64) {
     let end = anatomy
         .tube(StructureId::Pv)
         .map_or(anatomy.length(), |t| t.s_range().1)
-        .min(anatomy.length());
-    let n = (end / WHOLE_LEG_SPACING + 0.5).floor().max(1.0);
-    (0.0, (n * WHOLE_LEG_SPACING).min(end))
+        .min(anatomy.levels().knee);
+    let n = (end / WHOLE_LEG_SPACING + 1e-9).floor().max(1.0);
+    (0.0, n * WHOLE_LEG_SPACING)
 }
 
-/// Number of bins of [`WHOLE_LEG_SPACING`] over `[lo, hi)` (a last bin
-/// shorter than half is not counted, as in [`whole_leg_range`]).
+/// Number of whole bins of [`WHOLE_LEG_SPACING`] over `[lo, hi)`.
 pub(crate) fn bin_count(lo: f64, hi: f64) -> usize {
-    ((hi - lo) / WHOLE_LEG_SPACING + 0.5).floor().max(0.0) as usize
+    ((hi - lo) / WHOLE_LEG_SPACING + 1e-9).floor().max(0.0) as usize
 }
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -183,12 +184,15 @@ mod tests {
         for w in sites.windows(2) {
             assert!((w[1].s - w[0].s - WHOLE_LEG_SPACING).abs() < 1e-12);
         }
-        let pv_end = a.tube(StructureId::Pv).unwrap().s_range().1;
+        // The last bin ends at the knee joint line (0.40 m, a whole number
+        // of bins for the lean male), above the popliteal vein's end.
+        let knee = a.levels().knee;
         let last = sites.last().unwrap().s;
         assert!(
-            (pv_end - last).abs() <= WHOLE_LEG_SPACING,
-            "{last} vs {pv_end}"
+            (last + 0.5 * WHOLE_LEG_SPACING - knee).abs() < 1e-9,
+            "{last} vs {knee}"
         );
+        assert!(a.tube(StructureId::Pv).unwrap().s_range().1 > knee);
         let mut order: Vec<&str> = sites.iter().map(|x| x.vein.as_str()).collect();
         order.dedup();
         assert_eq!(order, ["cfv", "fv", "pv"]);

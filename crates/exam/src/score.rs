@@ -56,6 +56,31 @@ pub fn truth_at(truth: &[VeinTruth], vein: &str, s: f64) -> Option<Finding> {
         .and_then(|p| Finding::from_truth_kind(p.kind))
 }
 
+/// Half the probe's elevation (m): the image is a slab 10 mm thick (the
+/// contact probe's `half_elevation`, 5 mm), so a site within 5 mm of a
+/// thrombus's end shows both the thrombus and the normal vein beyond it.
+pub const FOOTPRINT: f64 = 0.005;
+
+/// The truth a call `call` at `s` on `vein` is scored against: the call's
+/// own finding when the ground truth shows it anywhere within
+/// [`FOOTPRINT`] of `s` (a site on a thrombus's end: either call is
+/// right), else the truth at `s` ([`truth_at`], normal off the vein).
+pub fn truth_for_call(truth: &[VeinTruth], vein: &str, s: f64, call: Option<Finding>) -> Finding {
+    let seen = |f: Finding| {
+        truth.iter().filter(|v| v.vein == vein).any(|v| {
+            v.pieces.iter().any(|p| {
+                p.s_start <= s + FOOTPRINT
+                    && p.s_end >= s - FOOTPRINT
+                    && Finding::from_truth_kind(p.kind) == Some(f)
+            })
+        })
+    };
+    match call {
+        Some(f) if seen(f) => f,
+        _ => truth_at(truth, vein, s).unwrap_or(Finding::Normal),
+    }
+}
+
 /// Whether `e` is a press over `vein` within half the site spacing (1 cm)
 /// of `s`: the press examined the site there.
 fn near(e: &CompressionEvent, vein: &str, s: f64) -> bool {
@@ -95,7 +120,7 @@ pub fn score_case(x: &ScoreInput) -> CaseScore {
                 .rev()
                 .find(|c| c.site == site.name)
                 .map(|c| c.finding);
-            let truth = truth_at(x.truth, &site.vein, site.s).unwrap_or(Finding::Normal);
+            let truth = truth_for_call(x.truth, &site.vein, site.s, call);
             let pressure_adequate = x
                 .events
                 .iter()

@@ -151,3 +151,26 @@ fn excessive_force_over_a_free_floating_thrombus_is_counted() {
     assert_eq!(s.excessive_force_on_tail, 1);
     assert_eq!(truth_at(&truth, vein, mid), Some(Finding::AcuteDvt));
 }
+
+/// A site on a thrombus's end (the isolated FV thrombus ends at 170 and
+/// 230 mm, where whole-leg sites sit): either call is scored right there;
+/// 6 mm inside, beyond the 5 mm footprint, only the thrombus is.
+#[test]
+fn a_site_on_a_thrombus_end_accepts_either_call() {
+    let c = builtin("isolated-fv-mid-acute").unwrap();
+    let t = c.ground_truth();
+    for s in [0.17, 0.23] {
+        for f in [Finding::Normal, Finding::AcuteDvt] {
+            assert_eq!(truth_for_call(&t, "fv", s, Some(f)), f, "{s}");
+        }
+        assert_eq!(
+            truth_for_call(&t, "fv", s, Some(Finding::ChronicPostThrombotic)),
+            truth_at(&t, "fv", s).unwrap()
+        );
+    }
+    assert_eq!(
+        truth_for_call(&t, "fv", 0.176, Some(Finding::Normal)),
+        Finding::AcuteDvt
+    );
+    assert_eq!(truth_for_call(&t, "fv", 0.176, None), Finding::AcuteDvt);
+}

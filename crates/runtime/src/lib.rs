@@ -9,7 +9,11 @@
 pub mod client;
 pub mod coupling;
 pub mod deploy;
+pub mod exam_probe;
+pub mod exam_run;
+pub mod exam_script;
 pub mod exam_site;
+mod exam_walk;
 pub mod haptic_side;
 pub mod integrity;
 pub mod live;

@@ -70,7 +70,13 @@ pub fn section_anatomy_with(
         Ok((e.lateral, e.depth, 2.0 * (e.radii[0] * e.radii[1]).sqrt()))
     };
     let (vl, vd, vdia) = cut(vein_id)?;
-    let (al, ad, adia) = cut(artery_of(vein_id))?;
+    // Between the CFA's bifurcation and the profunda's confluence the CFV
+    // runs with the (superficial) femoral artery: the CFA has ended.
+    let artery = match artery_of(vein_id) {
+        StructureId::Cfa if section.get(StructureId::Cfa).is_none() => StructureId::Fa,
+        a => a,
+    };
+    let (al, ad, adia) = cut(artery)?;
     let (fl, fd, fdia) = cut(StructureId::Femur)?;
     let femur_r = 0.5 * fdia;
     let mut c = base.clone();
@@ -86,7 +92,7 @@ pub fn section_anatomy_with(
     c.femur_radius = femur_r;
     c.muscle_thickness = fd - femur_r - section.fascia_depth;
     c.intermuscular_fascia_depth = intermuscular(&section, c.intermuscular_fascia_depth);
-    c.structures = extra_structures(&section, &[vein_id, artery_of(vein_id)], base, thrombi);
+    c.structures = extra_structures(&section, &[vein_id, artery], base, thrombi);
     c.vein_condition = thrombi.and_then(|t| {
         let s = section.get(vein_id).map_or(pose.s, |x| x.s);
         vein_condition(&t.state(vein_id, s), base)

@@ -120,6 +120,18 @@ impl VirtualRun {
         self.tick.device()
     }
 
+    /// The simulated device, mutable (a runner that drives the hand's
+    /// setpoint itself, as the scripted trainee of [`crate::exam_run`]).
+    pub fn device_mut(&mut self) -> &mut SimulatedDevice {
+        self.tick.device_mut()
+    }
+
+    /// Sets the probe orientation the tick sends with the position (unit
+    /// quaternion w, x, y, z; see [`HapticTick::set_orientation`]).
+    pub fn set_probe_orientation(&mut self, orientation: [f64; 4]) {
+        self.tick.set_orientation(orientation);
+    }
+
     /// The physics side.
     pub fn physics(&self) -> &PhysicsSide {
         match self.tick.direct_physics() {

@@ -6,6 +6,7 @@ pub mod calibrate_device;
 pub mod cases;
 pub mod device_arg;
 pub mod devices;
+pub mod exam;
 pub mod image;
 pub mod image_site;
 pub mod net;

@@ -1,0 +1,201 @@
+//! The scripted trainee (issue 14), headless on the virtual clock: the
+//! simulated hand walks the probe site to site over the case patient's
+//! leg, normal to the skin over the vein at each site (as
+//! [`crate::exam_site`] places it), presses, holds, releases and makes its
+//! calls, while the [`EventDetector`] turns the live state into compression
+//! events. Every tick is the one haptic tick of `run`
+//! ([`crate::virtual_clock::VirtualRun`]: physics, link, buffer model,
+//! device and hand on the scenario's rates).
+//!
+//! **The physics' leg.** The mesh spans the femur of the case's patient
+//! preset, `s ∈ [0, knee_s]`, its end rings held. A site closer than
+//! [`END_MARGIN`] to a held ring, or beyond it (the popliteal vein below
+//! the knee), is pressed on the mesh at the nearest point at least
+//! [`END_MARGIN`] inside (as [`crate::exam_site`] refuses sites within a
+//! probe's length of the ends) while its image is the case's section at the
+//! site itself. The case's own patient options that the mesh does not know
+//! (tense muscle, duplicated FV, lymph node) change the image only.
+//!
+//! **Between sites** the probe is lifted 20 mm off the skin and carried
+//! through the air, 20 mm off it, to above the next site (waypoints every
+//! 2 cm along the leg and 0.1 rad around it, so that the physics follows),
+//! then settles [`SETTLE`] before approaching. Where the renderer cannot
+//! draw the site's own section, the trainee slides up to 1 cm along the
+//! vein to the nearest drawable one (as a sonographer finds a window).
+//!
+//! **Sampling.** The detector reads the probe force at every tick (1 kHz)
+//! and the lumens at [`LOOK_RATE`]: a press rises at most ~25 N/s (measured,
+//! report), so 50 Hz resolves the lumens to ≤ 0.5 N of force, 5 % of the
+//! default 10 N press, and matches the trace rate of the events.
+
+use crate::exam_script::{CallPolicy, TraineeScript};
+use crate::exam_walk::Walker;
+pub use crate::exam_walk::{END_MARGIN, LOOK_RATE, SETTLE};
+use crate::scenario::Scenario;
+use anyhow::{Context, Result};
+use echothigh_anatomy::{Patient, VeinTruth};
+use echothigh_cases::Case;
+use echothigh_exam::coverage::event_state;
+use echothigh_exam::score::truth_for_call;
+use echothigh_exam::{
+    score_case, BinState, Call, CaseScore, CompressionEvent, ExamLog, Finding, ProtocolSite,
+    ScoreInput,
+};
+
+/// What a walk did, besides what went to the log.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExamOutcome {
+    /// The case's score (also given to the log).
+    pub score: CaseScore,
+    /// Virtual time of the walk (s).
+    pub virtual_time: f64,
+    /// Haptic ticks run.
+    pub ticks: u64,
+    /// Sites pressed, and the physics' press point of each (m): the site's
+    /// own `s`, or the nearest point [`END_MARGIN`] inside the mesh.
+    pub pressed: Vec<(ProtocolSite, f64)>,
+    /// Sites the trainee could not image (the renderer cannot draw any
+    /// section within 9.5 mm of them), and why: not pressed, not called.
+    pub unexaminable: Vec<(ProtocolSite, String)>,
+    /// Lumen looks made.
+    pub looks: u64,
+}
+
+/// The scenario of a case's walk: the built-in scenario on the case's
+/// patient preset, the mesh over the whole femur.
+pub fn exam_scenario(case: &Case) -> Result<Scenario> {
+    let preset = case
+        .file
+        .patient
+        .get("preset")
+        .and_then(|v| v.as_str())
+        .unwrap_or("lean-male");
+    let knee = Patient::preset(preset)
+        .with_context(|| format!("case {}: patient preset {preset:?}", case.name()))?
+        .knee_s;
+    let mut s = Scenario::builtin()?;
+    s.thigh.patient = preset.to_string();
+    s.thigh.centre_s = 0.5 * knee;
+    s.thigh.length = knee;
+    s.site.name.clear();
+    // The walk drains the trace every tick: a short buffer suffices.
+    s.run.duration = 1.0;
+    s.validate()
+        .with_context(|| format!("the exam scenario of case {}", case.name()))?;
+    Ok(s)
+}
+
+/// Runs `script` on `case`, sending events, calls and the score to `log` as
+/// they happen. Errors name the script's key, the site, or the physics'
+/// failure.
+pub fn run_exam(script: &TraineeScript, case: &Case, log: &mut dyn ExamLog) -> Result<ExamOutcome> {
+    let scenario = exam_scenario(case)?;
+    let protocol = script.protocol();
+    let sites = protocol.sites(&case.anatomy);
+    let names: Vec<&str> = sites.iter().map(|x| x.name.as_str()).collect();
+    script.check_sites(&names)?;
+    let mut w = Walker::new(&scenario, script, case)?;
+    let truth = case.ground_truth();
+    let mut pressed = Vec::new();
+    let mut unexaminable = Vec::new();
+    let mut calls = Vec::new();
+    for site in sites.iter().filter(|x| !script.skip.contains(&x.name)) {
+        let first = w.events.len();
+        let pressed_at = w.press_site(site, case).with_context(|| {
+            format!(
+                "pressing site {} ({} at {:.0} mm)",
+                site.name,
+                site.vein,
+                site.s * 1e3
+            )
+        })?;
+        let s_phys = match pressed_at {
+            Ok(s) => s,
+            Err(why) => {
+                unexaminable.push((site.clone(), why));
+                continue;
+            }
+        };
+        pressed.push((site.clone(), s_phys));
+        for e in &w.events[first..] {
+            log.event(e).map_err(|e| anyhow::anyhow!("exam log: {e}"))?;
+        }
+        if script.calls == CallPolicy::Honest {
+            if let Some(finding) = honest_call(&w.events, site) {
+                let call = make_call(site, finding, &truth, w.run.time());
+                log.call(&call)
+                    .map_err(|e| anyhow::anyhow!("exam log: {e}"))?;
+                calls.push(call);
+            }
+        }
+    }
+    if let Some(e) = w.detector.finish(w.run.time()) {
+        w.coverage.apply(&e);
+        log.event(&e)
+            .map_err(|e| anyhow::anyhow!("exam log: {e}"))?;
+        w.events.push(e);
+    }
+    if script.calls == CallPolicy::Scripted {
+        for c in &script.call {
+            let site = sites.iter().find(|x| x.name == c.site).expect("checked");
+            let finding = Finding::from_name(&c.finding).expect("validated");
+            let call = make_call(site, finding, &truth, w.run.time());
+            log.call(&call)
+                .map_err(|e| anyhow::anyhow!("exam log: {e}"))?;
+            calls.push(call);
+        }
+    }
+    let score = score_case(&ScoreInput {
+        case: case.name(),
+        protocol,
+        sites: &sites,
+        truth: &truth,
+        events: &w.events,
+        calls: &calls,
+        coverage: &w.coverage,
+    });
+    log.finish(w.coverage.bins(), &score)
+        .map_err(|e| anyhow::anyhow!("exam log: {e}"))?;
+    Ok(ExamOutcome {
+        score,
+        virtual_time: w.run.time(),
+        ticks: w.ticks,
+        pressed,
+        unexaminable,
+        looks: w.looks,
+    })
+}
+
+/// The honest call at `site` from the presses there (within 1 cm, on its
+/// vein), strongest first: closed → normal, not closed with adequate
+/// pressure → acute DVT, else indeterminate; `None` when not pressed.
+pub fn honest_call(events: &[CompressionEvent], site: &ProtocolSite) -> Option<Finding> {
+    events
+        .iter()
+        .filter(|e| e.vein.as_deref() == Some(site.vein.as_str()) && (e.s - site.s).abs() <= 0.01)
+        .map(event_state)
+        .max_by_key(|s| match s {
+            BinState::NotExamined => 0,
+            BinState::InadequatePressure => 1,
+            BinState::NotClosed => 2,
+            BinState::Closed => 3,
+        })
+        .map(|s| match s {
+            BinState::Closed => Finding::Normal,
+            BinState::NotClosed => Finding::AcuteDvt,
+            _ => Finding::Indeterminate,
+        })
+}
+
+/// A call at `site` at time `t` (s), with the truth it is scored against
+/// ([`truth_for_call`]).
+fn make_call(site: &ProtocolSite, finding: Finding, truth: &[VeinTruth], t: f64) -> Call {
+    Call {
+        site: site.name.clone(),
+        vein: site.vein.clone(),
+        s: site.s,
+        finding,
+        truth: truth_for_call(truth, &site.vein, site.s, Some(finding)),
+        t,
+    }
+}
