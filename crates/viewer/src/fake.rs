@@ -7,6 +7,8 @@ use echothigh_runtime::live::{
     CommandLimits, CouplingMode, ImageInfo, LiveCommand, LiveControl, LiveMesh, LiveSnapshot,
     LiveStatus, VeinState,
 };
+use echothigh_cases::Case;
+use echothigh_runtime::live::{SectionReading, COAPTED_RATIO};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{mpsc, Mutex};
 use std::time::Duration;
@@ -31,6 +33,8 @@ struct Inner {
     playing: bool,
     frame: u64,
     commands: Vec<LiveCommand>,
+    /// The loaded case ([`LiveControl::set_case`]).
+    case: Option<Case>,
 }
 
 /// A [`LiveControl`] for tests.
@@ -162,6 +166,7 @@ impl LiveControl for FakeLive {
             // The fake's thigh is the cylinder: no level along a leg.
             level_s: 0.0,
             level: None,
+            section: i.case.as_ref().map(|c| reading(c, z0, f, out.status.time)),
         };
     }
 
@@ -185,6 +190,13 @@ impl LiveControl for FakeLive {
 
     fn page_closed(&self) {
         self.watchers.fetch_sub(1, Ordering::SeqCst);
+    }
+
+    fn set_case(&self, case: Option<&Case>) -> Result<(), String> {
+        let mut i = self.inner.lock().unwrap();
+        i.case = case.cloned();
+        i.probe = None;
+        Ok(())
     }
 
     fn vein(&self) -> VeinState {
@@ -232,6 +244,36 @@ impl LiveControl for FakeLive {
             LiveCommand::SetLatency { seconds } => i.latency = seconds,
         }
         Ok(())
+    }
+}
+
+/// Force (N) at which the double's healthy vein coapts: lumen ratio
+/// `1 − f / FAKE_CLOSING`, below [`COAPTED_RATIO`] from 0.9 of it.
+pub const FAKE_CLOSING: f64 = 8.0;
+/// Force (N) above which the double's artery deforms, by `(f − F)/40 N`.
+pub const FAKE_ARTERY_ONSET: f64 = 10.0;
+
+/// The double's reading of a loaded case's section with the probe at `z`
+/// (m, `s = LENGTH/2 − z` below the groin end) pressing with `f` (N): the
+/// deep vein there; healthy, it closes linearly by [`FAKE_CLOSING`]; where
+/// the case's thrombus fills it (fill ≥ ½), it keeps ≥ 0.9 of its lumen.
+fn reading(case: &Case, z: f64, f: f64, time: f64) -> SectionReading {
+    let s = (LENGTH / 2.0 - z).clamp(0.0, case.anatomy.length());
+    let vein = case.anatomy.deep_vein_at(s);
+    let filled = case.thrombi.state(vein, s).fill >= 0.5;
+    let ratio = if filled {
+        1.0 - 0.1 * (f / 40.0).min(1.0)
+    } else {
+        (1.0 - f / FAKE_CLOSING).max(0.0)
+    };
+    SectionReading {
+        s,
+        vein: Some(vein),
+        vein_lumen_ratio: ratio,
+        artery_lumen_ratio: 1.0 - ((f - FAKE_ARTERY_ONSET).max(0.0) / 40.0).min(0.5),
+        walls_met: ratio < COAPTED_RATIO,
+        frame: 0,
+        time,
     }
 }
 
