@@ -4,7 +4,7 @@
 //!
 //! Units: SI (m, N, s), thigh frame (z along the thigh, x lateral, y up).
 
-pub use echothigh_anatomy::LegLevel;
+pub use echothigh_anatomy::{LegLevel, StructureId};
 use serde::{Deserialize, Serialize};
 
 /// Coupling between physics and haptics (see `DESIGN.md` §3).
@@ -30,6 +30,53 @@ pub struct LiveMesh {
     pub rest: Vec<[f32; 3]>,
     /// Triangles as node indices.
     pub triangles: Vec<[u32; 3]>,
+}
+
+/// A vein's lumen below this fraction of its rest area counts as coapted,
+/// its walls met: issue 13's criterion ("a healthy segment coapts: lumen <
+/// 10 % of rest"), which the image's segmentation also reaches (a healthy
+/// vein's dark-pixel ratio 0.03 at 10 N, `tests/case_compression.rs`).
+pub const COAPTED_RATIO: f64 = 0.10;
+
+/// The section under the probe as the imaging thread last drew it (issue
+/// 13, for the live exam's event detector of issue 14): published with each
+/// frame, lock-free, and carried in [`LiveStatus::section`]. The ratios are
+/// the renderer's lumen laws at the frame's tissue pressure at each vessel
+/// (`echothigh_imaging::Renderer::lumens`), the vein's per-segment law when a
+/// case's thrombi are loaded.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SectionReading {
+    /// Where the drawn section cuts the leg: m below the inguinal ligament
+    /// (the section the imaging thread built, within its rebuild threshold
+    /// of the probe's `level_s`); 0 on the elliptic cylinder.
+    pub s: f64,
+    /// The deep vein the section studies (`cfv`, `fv`, `pv`); `None` on the
+    /// elliptic cylinder, whose one vein has no name.
+    pub vein: Option<StructureId>,
+    /// The studied vein's lumen area over its rest area (0 to ~1.2).
+    pub vein_lumen_ratio: f64,
+    /// The companion artery's lumen area over its rest area (its pulse
+    /// included).
+    pub artery_lumen_ratio: f64,
+    /// Whether the vein's walls met: `vein_lumen_ratio <` [`COAPTED_RATIO`].
+    pub walls_met: bool,
+    /// The frame the reading came with (the image's frame count).
+    pub frame: u64,
+    /// Simulated time of the physics state the frame shows (s).
+    pub time: f64,
+}
+
+impl SectionReading {
+    /// A copy with every non-finite number replaced by 0.
+    pub fn sanitized(&self) -> SectionReading {
+        SectionReading {
+            s: finite(self.s),
+            vein_lumen_ratio: finite(self.vein_lumen_ratio),
+            artery_lumen_ratio: finite(self.artery_lumen_ratio),
+            time: finite(self.time),
+            ..*self
+        }
+    }
 }
 
 /// The scalar part of the live state: what the runtime reports besides the
@@ -75,6 +122,9 @@ pub struct LiveStatus {
     /// The venous segment the probe examines at `level_s` (`None` on the
     /// cylinder).
     pub level: Option<LegLevel>,
+    /// The section under the probe with the last frame (`None` before the
+    /// imaging thread's first frame, and while no page looks).
+    pub section: Option<SectionReading>,
 }
 
 impl LiveStatus {
@@ -101,6 +151,7 @@ impl LiveStatus {
             exam_playing,
             level_s,
             level,
+            section,
         } = *self;
         LiveStatus {
             time: finite(time),
@@ -121,6 +172,7 @@ impl LiveStatus {
             exam_playing,
             level_s: finite(level_s),
             level,
+            section: section.map(|r| r.sanitized()),
         }
     }
 }

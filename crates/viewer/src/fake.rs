@@ -162,6 +162,8 @@ impl LiveControl for FakeLive {
             // The fake's thigh is the cylinder: no level along a leg.
             level_s: 0.0,
             level: None,
+            // The fake draws no anatomy: no section reading.
+            section: None,
         };
     }
 
