@@ -20,8 +20,12 @@ use nalgebra::{Matrix3, Vector3};
 /// Tabulation step of the tubes along `s` (m): 0.5 mm.
 pub const SAMPLE_STEP: f64 = 5e-4;
 
-/// Identifier of an anatomical structure (the ids of the `anatomy` JSON).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+/// Identifier of an anatomical structure (the ids of the `anatomy` JSON;
+/// serialized as [`StructureId::as_str`]).
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
+#[serde(rename_all = "snake_case")]
 pub enum StructureId {
     /// Common femoral vein.
     Cfv,
@@ -298,4 +302,23 @@ pub struct Ellipsoid {
     pub axes: Matrix3<f64>,
     /// Semi-axes along the columns of `axes` (m).
     pub semi_axes: Vector3<f64>,
+}
+
+#[cfg(test)]
+mod id_tests {
+    use super::StructureId;
+
+    /// The serialized id is the printed one (the live state's `vein`, the
+    /// `anatomy` JSON), for every id, and parses back.
+    #[test]
+    fn serialized_ids_are_the_printed_ones() {
+        use StructureId::*;
+        for id in [
+            Cfv, Cfa, Gsv, Dfv, Dfa, Fv, Fa, Pv, Pa, Fv2, Femur, Tibia, Sartorius, LymphNode,
+        ] {
+            let j = serde_json::to_string(&id).unwrap();
+            assert_eq!(j, format!("\"{}\"", id.as_str()));
+            assert_eq!(serde_json::from_str::<StructureId>(&j).unwrap(), id);
+        }
+    }
 }

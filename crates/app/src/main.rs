@@ -70,7 +70,10 @@ fn main() -> std::process::ExitCode {
         Command::Psf(a) => cmd::psf::run(a),
         Command::Experiment(c) => echothigh_experiments::run(c),
         #[cfg(feature = "viewer")]
-        Command::View(a) => echothigh_viewer::run(a),
+        Command::View(a) => match a.case.as_deref().map(cmd::cases::load_case).transpose() {
+            Ok(case) => echothigh_viewer::run(a, case),
+            Err(e) => Err(e),
+        },
         Command::Anatomy(a) => cmd::anatomy::run(a),
         Command::Cases(c) => cmd::cases::run(c),
         Command::Devices(a) => cmd::devices::run(a),

@@ -130,3 +130,29 @@ fn anatomy_with_a_case_gives_the_state_of_each_vein() {
         .unwrap();
     assert_eq!(gsv["state"]["fill"], 0.0);
 }
+
+/// `echothigh cases list | head` (issue 13): a reader that has gone (the
+/// pipe's read end closed before the first write, so that every write
+/// meets EPIPE whatever the timing) ends the listing quietly: exit 0, no
+/// panic on stderr. Before the fix `println!` panicked ("failed printing to
+/// stdout: Broken pipe", exit 101). Also for `show`, text and JSON.
+#[test]
+fn a_closed_pipe_ends_the_output_quietly() {
+    for args in [
+        &["cases", "list"][..],
+        &["cases", "list", "--json"],
+        &["cases", "show", "fv-chronic"],
+    ] {
+        let (reader, writer) = std::io::pipe().unwrap();
+        drop(reader);
+        let out = Command::new(env!("CARGO_BIN_EXE_echothigh"))
+            .args(args)
+            .stdout(writer)
+            .stderr(std::process::Stdio::piped())
+            .output()
+            .expect("run echothigh");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success(), "{args:?}: {:?}, {err}", out.status);
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}

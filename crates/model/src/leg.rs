@@ -94,7 +94,8 @@ pub struct LegSurface {
 }
 
 impl LegSurface {
-    /// The leg of `geometry.patient` (a preset name), or `None` for the
+    /// The leg of `geometry.patient` (a preset name; its full description
+    /// `geometry.patient_spec` when a case set one), or `None` for the
     /// elliptic cylinder (`patient = ""`). Errors name `{prefix}.patient`
     /// (unknown preset) or `{prefix}.centre_s` (segment outside the femur).
     pub fn new(geometry: &ThighGeometry, prefix: &str) -> Result<Option<Self>, ConfigError> {
@@ -102,9 +103,12 @@ impl LegSurface {
             return Ok(None);
         }
         let key = |f: &str| crate::config::key(prefix, f);
-        let patient = Patient::preset(&geometry.patient).map_err(|e| {
-            ConfigError::invalid(key("patient"), format!("= {:?}: {e}", geometry.patient))
-        })?;
+        let patient = match &geometry.patient_spec {
+            Some(p) => p.clone(),
+            None => Patient::preset(&geometry.patient).map_err(|e| {
+                ConfigError::invalid(key("patient"), format!("= {:?}: {e}", geometry.patient))
+            })?,
+        };
         let anatomy = Anatomy::new(patient)
             .map_err(|e| ConfigError::invalid(key("patient"), e.to_string()))?;
         let knee = anatomy.levels().knee;

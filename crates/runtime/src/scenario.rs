@@ -143,6 +143,28 @@ impl Scenario {
         }
     }
 
+    /// Puts the physical leg on `patient` (a case's, issue 13: a preset
+    /// with its overrides): `[thigh] patient` becomes its name and the mesh
+    /// follows its full description (`ThighGeometry::patient_spec`). The
+    /// segment `[centre_s ± length/2]` is kept when it lies on this
+    /// patient's femur, else it spans the whole femur `s ∈ [0, knee_s]` (a
+    /// shorter leg). Errors (validated again) name the key.
+    pub fn set_patient(&mut self, patient: &echothigh_anatomy::Patient) -> Result<()> {
+        let anatomy = echothigh_anatomy::Anatomy::new(patient.clone())
+            .with_context(|| format!("patient {:?}", patient.name))?;
+        let knee = anatomy.levels().knee;
+        let t = &mut self.thigh;
+        t.patient = patient.name.clone();
+        t.patient_spec = Some(patient.clone());
+        let (s0, s1) = (t.centre_s - 0.5 * t.length, t.centre_s + 0.5 * t.length);
+        if !(s0 >= 0.0 && s1 <= knee) {
+            t.length = knee;
+            t.centre_s = 0.5 * knee;
+        }
+        self.validate()
+            .with_context(|| format!("the scenario on patient {:?}", patient.name))
+    }
+
     /// Checks every section, naming the offending key.
     pub fn validate(&self) -> Result<()> {
         self.model_config()

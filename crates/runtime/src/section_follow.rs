@@ -25,13 +25,14 @@
 //! the slice ([`echothigh_imaging::Renderer::set_elevation`]) at every
 //! frame, within a margin of `δ`.
 
-use crate::section_image::section_anatomy;
+use crate::section_image::section_anatomy_with;
 use anyhow::{Context, Result};
 use echothigh_anatomy::section::MAX_ANGLE;
-use echothigh_anatomy::{frame, Anatomy, ProbePose};
+use echothigh_anatomy::{frame, Anatomy, ProbePose, Thrombi};
 use echothigh_imaging::{AnatomyConfig, ImagingConfig, MaterialWindow, Renderer, VeinState};
 use echothigh_model::{LegSurface, Vec3};
 use nalgebra::{Quaternion, UnitQuaternion};
+use std::sync::Arc;
 
 /// The probe's pose on `leg` from its face centre `position` (m, model
 /// frame) and `orientation` (w, x, y, z; model ← tool, the beam along the
@@ -85,6 +86,9 @@ pub struct SectionImager {
     cfg: ImagingConfig,
     vein: VeinState,
     renderer: Renderer,
+    /// A case's thrombus segments on this leg (issue 13), `None` for a
+    /// healthy leg (the vein then follows the global `vein` state).
+    thrombi: Option<Arc<Thrombi>>,
     /// The pose the drawn anatomy was taken at.
     built: ProbePose,
     /// The pose of the last rebuild attempt (a failed one keeps `built`).
@@ -104,10 +108,26 @@ impl SectionImager {
         vein: VeinState,
         pose: ProbePose,
     ) -> Result<Self> {
-        let (renderer, threshold, last_error) = match Self::build(&leg, cfg, vein, &pose, None)? {
+        Self::with_thrombi(leg, cfg, vein, pose, None)
+    }
+
+    /// As [`SectionImager::new`], each section drawn with `thrombi` (a
+    /// case's segments on `leg`'s anatomy: every vein the plane cuts takes
+    /// its lumen law at the `s` where it is cut,
+    /// [`crate::section_image::section_anatomy_with`]).
+    pub fn with_thrombi(
+        leg: LegSurface,
+        cfg: &ImagingConfig,
+        vein: VeinState,
+        pose: ProbePose,
+        thrombi: Option<Arc<Thrombi>>,
+    ) -> Result<Self> {
+        let t = thrombi.as_deref();
+        let (renderer, threshold, last_error) = match Self::build(&leg, cfg, vein, &pose, None, t)?
+        {
             Outcome::Built(r, t) => (*r, t, None),
             Outcome::Undrawable(e) => {
-                match Self::build(&leg, cfg, vein, &pose, Some(&cfg.anatomy))? {
+                match Self::build(&leg, cfg, vein, &pose, Some(&cfg.anatomy), t)? {
                     Outcome::Built(r, t) => (*r, t, Some(e)),
                     Outcome::Undrawable(e2) => anyhow::bail!("imaging: {e2}"),
                 }
@@ -118,6 +138,7 @@ impl SectionImager {
             cfg: cfg.clone(),
             vein,
             renderer,
+            thrombi,
             built: pose,
             tried: pose,
             threshold,
@@ -135,6 +156,7 @@ impl SectionImager {
         vein: VeinState,
         pose: &ProbePose,
         anatomy: Option<&AnatomyConfig>,
+        thrombi: Option<&Thrombi>,
     ) -> Result<Outcome> {
         let leg_anatomy = leg.anatomy();
         let dx = cfg.pixel_width();
@@ -156,7 +178,7 @@ impl SectionImager {
         c.pan_range = threshold + 2.0 * dx;
         c.anatomy = match anatomy {
             Some(a) => a.clone(),
-            None => match section_anatomy(&cfg.anatomy, leg_anatomy, pose) {
+            None => match section_anatomy_with(&cfg.anatomy, leg_anatomy, pose, thrombi) {
                 Ok(a) => a,
                 Err(e) => return Ok(Outcome::Undrawable(format!("{e:#}"))),
             },
@@ -213,6 +235,7 @@ impl SectionImager {
         SectionBuilder {
             leg: self.leg.clone(),
             cfg: self.cfg.clone(),
+            thrombi: self.thrombi.clone(),
         }
     }
 
@@ -277,13 +300,18 @@ impl SectionImager {
         if vein != self.vein {
             let drawn = self.renderer.config().anatomy.clone();
             if let Outcome::Built(r, _) =
-                Self::build(&self.leg, &self.cfg, vein, &self.built, Some(&drawn))?
+                Self::build(&self.leg, &self.cfg, vein, &self.built, Some(&drawn), None)?
             {
                 self.renderer = *r;
             }
             self.vein = vein;
         }
         Ok(())
+    }
+
+    /// The case's thrombus segments it draws, if any.
+    pub fn thrombi(&self) -> Option<&Thrombi> {
+        self.thrombi.as_deref()
     }
 
     /// The leg it images.
@@ -322,6 +350,7 @@ impl SectionImager {
 pub struct SectionBuilder {
     leg: LegSurface,
     cfg: ImagingConfig,
+    thrombi: Option<Arc<Thrombi>>,
 }
 
 impl SectionBuilder {
@@ -331,7 +360,14 @@ impl SectionBuilder {
         Ok(SectionBuild {
             pose: *pose,
             vein,
-            outcome: SectionImager::build(&self.leg, &self.cfg, vein, pose, None)?,
+            outcome: SectionImager::build(
+                &self.leg,
+                &self.cfg,
+                vein,
+                pose,
+                None,
+                self.thrombi.as_deref(),
+            )?,
         })
     }
 }

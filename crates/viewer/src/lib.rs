@@ -38,6 +38,11 @@ pub struct Args {
     /// Scenario TOML (defaults built in when absent).
     #[arg(long)]
     pub scenario: Option<PathBuf>,
+    /// A case (issue 13): a shipped case's name (`echothigh cases list`) or
+    /// a case TOML file; the leg becomes its patient's and its veins carry
+    /// its thrombus segments. The caller loads it ([`run`]'s `case`).
+    #[arg(long, value_name = "NAME|FILE")]
+    pub case: Option<String>,
     /// TCP port; 0 picks a free one (the URL printed says which).
     #[arg(long, default_value_t = 8080)]
     pub port: u16,
@@ -87,22 +92,28 @@ pub fn url(addr: SocketAddr) -> String {
 }
 
 /// Runs the viewer until Ctrl-C: starts the live system (`runtime::live_system`)
-/// from the scenario, serves it, and stops its threads on the way out. Its
-/// exam mode is anonymous practice over the built-in case library.
-pub fn run(args: Args) -> Result<()> {
+/// from the scenario on `case` (the one `args.case` names, loaded by the
+/// caller), serves it, and stops its threads on the way out. Its exam mode
+/// is anonymous practice over the built-in case library.
+pub fn run(args: Args, case: Option<echothigh_cases::Case>) -> Result<()> {
     let plan = exam::ExamPlan::practice(rand::random())?;
     let session = exam::ExamSession::new(plan, Box::new(exam::sink::MemorySink::default()), true);
-    run_with(args, session)
+    run_with(args, case, session)
 }
 
-/// Runs the viewer with `session` as its exam session (the `exam` command
-/// passes a trainee's plan and a database sink).
-pub fn run_with(args: Args, session: ExamSession) -> Result<()> {
+/// [`run`] with `session` as its exam session (the `exam` command passes a
+/// trainee's plan and a database sink).
+pub fn run_with(
+    args: Args,
+    case: Option<echothigh_cases::Case>,
+    session: ExamSession,
+) -> Result<()> {
     check_bind(args.bind, args.allow_remote)?;
     check_rate(args.rate)?;
     let idle_timeout = check_idle_timeout(args.idle_timeout)?;
     let scenario = Scenario::load(args.scenario.as_deref())?;
-    let system = LiveSystem::start(scenario).context("starting the live simulation")?;
+    let system = LiveSystem::start_with_case(scenario, case.as_ref())
+        .context("starting the live simulation")?;
     let control: Arc<dyn LiveControl> = system.clone();
     let config = ServerConfig {
         state_rate: args.rate,

@@ -9,6 +9,7 @@
 use anyhow::{bail, Context, Result};
 use echothigh_cases::{Case, CaseFile, Generator};
 use serde::Serialize;
+use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
 /// `echothigh cases …`.
@@ -118,6 +119,20 @@ fn json_case(c: &Case) -> JsonCase<'_> {
     }
 }
 
+/// Runs `print` on the locked stdout. The output goes through checked
+/// writes (`println!` panics when the reader has gone, e.g. `cases list |
+/// head`): a closed pipe (`BrokenPipe`, which Rust's runtime turns SIGPIPE
+/// into; SIGPIPE is not reset here, the viewer's sockets need it ignored)
+/// ends the output quietly, as the reader wanted no more; any other write
+/// error is reported.
+pub fn to_stdout(print: impl FnOnce(&mut dyn Write) -> io::Result<()>) -> Result<()> {
+    let mut out = io::stdout().lock();
+    match print(&mut out).and_then(|()| out.flush()) {
+        Err(e) if e.kind() == io::ErrorKind::BrokenPipe => Ok(()),
+        r => r.context("writing to stdout"),
+    }
+}
+
 /// Runs `echothigh cases …`.
 pub fn run(cmd: CasesCommand) -> Result<()> {
     match cmd {
@@ -127,35 +142,44 @@ pub fn run(cmd: CasesCommand) -> Result<()> {
                 .collect::<Result<Vec<_>>>()?;
             if json {
                 let list: Vec<_> = cases.iter().map(json_case).collect();
-                println!("{}", serde_json::to_string(&list)?);
+                let text = serde_json::to_string(&list)?;
+                to_stdout(|out| writeln!(out, "{text}"))?;
             } else {
-                for c in &cases {
-                    let j = json_case(c);
-                    println!(
-                        "{:<28} {:<15} {:<28} {}",
-                        j.name, j.patient, j.diagnosis, j.title
-                    );
-                }
+                to_stdout(|out| {
+                    for c in &cases {
+                        let j = json_case(c);
+                        writeln!(
+                            out,
+                            "{:<28} {:<15} {:<28} {}",
+                            j.name, j.patient, j.diagnosis, j.title
+                        )?;
+                    }
+                    Ok(())
+                })?;
             }
         }
         CasesCommand::Show { name, json } => {
             let c = load_case(&name)?;
             let j = json_case(&c);
             if json {
-                println!("{}", serde_json::to_string(&j)?);
+                let text = serde_json::to_string(&j)?;
+                to_stdout(|out| writeln!(out, "{text}"))?;
             } else {
-                println!("{} — {} ({})", j.name, j.title, j.patient);
-                let v = j.vignette;
-                println!("age {}, Wells {}: {}", v.age, v.wells, v.symptoms);
-                println!("diagnosis: {}", j.diagnosis);
-                for vein in &j.truth {
-                    let parts: Vec<String> = vein
-                        .segments
-                        .iter()
-                        .map(|s| format!("{:.0}–{:.0} mm {}", s.s_start_mm, s.s_end_mm, s.kind))
-                        .collect();
-                    println!("  {:<4} {}", vein.vein, parts.join(", "));
-                }
+                to_stdout(|out| {
+                    writeln!(out, "{} — {} ({})", j.name, j.title, j.patient)?;
+                    let v = j.vignette;
+                    writeln!(out, "age {}, Wells {}: {}", v.age, v.wells, v.symptoms)?;
+                    writeln!(out, "diagnosis: {}", j.diagnosis)?;
+                    for vein in &j.truth {
+                        let parts: Vec<String> = vein
+                            .segments
+                            .iter()
+                            .map(|s| format!("{:.0}–{:.0} mm {}", s.s_start_mm, s.s_end_mm, s.kind))
+                            .collect();
+                        writeln!(out, "  {:<4} {}", vein.vein, parts.join(", "))?;
+                    }
+                    Ok(())
+                })?;
             }
         }
         CasesCommand::Generate {
@@ -183,11 +207,14 @@ pub fn run(cmd: CasesCommand) -> Result<()> {
                 std::fs::write(&path, text)
                     .with_context(|| format!("writing {}", path.display()))?;
             }
-            println!(
-                "{count} cases in {} ({positives} acute DVT, {:.1} %)",
-                out.display(),
-                100.0 * positives as f64 / count as f64
-            );
+            let share = 100.0 * positives as f64 / count as f64;
+            to_stdout(|o| {
+                writeln!(
+                    o,
+                    "{count} cases in {} ({positives} acute DVT, {share:.1} %)",
+                    out.display()
+                )
+            })?;
         }
     }
     Ok(())

@@ -85,6 +85,13 @@ pub struct ThighGeometry {
     /// clinical practice; no measured ratio was retrieved, and 2× is the
     /// active-muscle factor of row 19, an upper bound for a passive leg).
     pub canal_stiffness: f64,
+    /// With a `patient`: the patient's full description when a case sets it
+    /// (a preset with overrides: variants, tense muscle, ...; issue 13),
+    /// which then replaces the preset named by `patient`. Not a key of the
+    /// scenario file: set in code (the runtime's `Scenario::with_case`).
+    /// Default `None`.
+    #[serde(skip)]
+    pub patient_spec: Option<echothigh_anatomy::Patient>,
 }
 
 impl Default for ThighGeometry {
@@ -102,6 +109,7 @@ impl Default for ThighGeometry {
             patient: String::new(),
             centre_s: 0.20,
             canal_stiffness: 1.5,
+            patient_spec: None,
         }
     }
 }

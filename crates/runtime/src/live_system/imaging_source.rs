@@ -7,10 +7,11 @@
 use super::shared::Shared;
 use crate::section_follow::{leg_pose, SectionBuild, SectionImager};
 use anyhow::{Context, Result};
-use echothigh_anatomy::ProbePose;
+use echothigh_anatomy::{ProbePose, StructureId, Thrombi};
 use echothigh_imaging::{ImagingConfig, Renderer, VeinState};
 use echothigh_model::LegSurface;
 use std::sync::mpsc::{channel, Receiver, Sender, TryRecvError};
+use std::sync::Arc;
 use std::thread::JoinHandle;
 
 /// The probe's part of a frame's input, copied out of the shared image input.
@@ -71,6 +72,9 @@ impl Drop for Worker {
     }
 }
 
+/// The drawn section's `s` (m) and the deep vein it studies.
+pub(super) type Studied = (f64, StructureId);
+
 /// What the imaging thread renders.
 pub(super) enum Source {
     /// The scenario's `[imaging.anatomy]`.
@@ -82,12 +86,14 @@ pub(super) enum Source {
 impl Source {
     /// The source of a scenario with (`Some`) or without a leg; the first
     /// section at the probe's published pose (the anterior line at the
-    /// mesh's centre before the physics publishes).
+    /// mesh's centre before the physics publishes); on a leg, `thrombi` (a
+    /// case's segments on it) set each vein's lumen law.
     pub fn new(
         shared: &Shared,
         cfg: &ImagingConfig,
         leg: Option<LegSurface>,
         vein: VeinState,
+        thrombi: Option<Arc<Thrombi>>,
     ) -> Result<Self> {
         Ok(match leg {
             None => Source::Fixed(Box::new(
@@ -103,7 +109,7 @@ impl Source {
                     })?;
                 let pose = leg_pose(&leg, pos, q)
                     .unwrap_or_else(|_| ProbePose::transverse(leg.s_of_z(0.0), 0.0));
-                let imager = SectionImager::new(leg, cfg, vein, pose)?;
+                let imager = SectionImager::with_thrombi(leg, cfg, vein, pose, thrombi)?;
                 let worker = Worker::spawn(&imager)?;
                 Source::Leg(Box::new(imager), worker)
             }
@@ -124,11 +130,16 @@ impl Source {
 
     /// Follows the probe (on the leg: installs a finished section, asks
     /// for a new one when due and none is under way, moves the plane
-    /// across the slice) and returns the renderer and the frame's lateral
-    /// offset (m).
-    pub fn frame(&mut self, input: &Probe, vein: VeinState) -> Result<(&mut Renderer, f64)> {
+    /// across the slice) and returns the renderer, the frame's lateral
+    /// offset (m) and, on the leg, the drawn section's `s` (m) and the deep
+    /// vein it studies.
+    pub fn frame(
+        &mut self,
+        input: &Probe,
+        vein: VeinState,
+    ) -> Result<(&mut Renderer, f64, Option<Studied>)> {
         match self {
-            Source::Fixed(r) => Ok((r, input.lateral_offset)),
+            Source::Fixed(r) => Ok((r, input.lateral_offset, None)),
             Source::Leg(f, w) => {
                 match w.built.try_recv() {
                     Ok(b) => {
@@ -156,7 +167,9 @@ impl Source {
                     // Beyond the leg's ends: the last section, unpanned.
                     Err(_) => 0.0,
                 };
-                Ok((f.renderer(), offset))
+                let s = f.built_pose().s;
+                let studied = (s, f.leg().anatomy().deep_vein_at(s));
+                Ok((f.renderer(), offset, Some(studied)))
             }
         }
     }

@@ -11,6 +11,11 @@
 //! the new settings from where the thigh and the probe were ([`session`]);
 //! playing the exam keeps the thigh and hands the probe to the script;
 //! resetting starts from rest.
+//!
+//! A case (issue 13, [`LiveSystem::set_case`]) replaces the patient's leg
+//! under the physics and the imaging thread and gives each vein its
+//! thrombus segments; the imaging thread publishes, with each frame, a
+//! reading of the section under the probe ([`crate::live::SectionReading`]).
 
 mod imaging_source;
 mod publish;
@@ -24,8 +29,10 @@ use crate::live::{
 use crate::physics_side::PhysicsSide;
 use crate::scenario::Scenario;
 use anyhow::{Context, Result};
+use echothigh_anatomy::Thrombi;
+use echothigh_cases::Case;
 use echothigh_imaging::SectionDeformation;
-use echothigh_model::LegSurface;
+use echothigh_model::{LegSurface, ThighGeometry};
 use nalgebra::{UnitQuaternion, Vector3};
 use publish::ImagingThread;
 use session::{start_session, Carried, Session};
@@ -42,6 +49,10 @@ struct Inner {
     placement: (f64, f64, f64),
     /// The patient's leg the mesh follows (`None` on the cylinder).
     leg: Option<LegSurface>,
+    /// The scenario's own thigh, restored when the case is cleared.
+    base_thigh: ThighGeometry,
+    /// The loaded case's name and its thrombus segments on `leg`.
+    case: Option<(String, Arc<Thrombi>)>,
 }
 
 /// Height of the lifted probe above the rest skin (m, a negative depth): a
@@ -159,20 +170,21 @@ pub fn limits_of(s: &Scenario) -> CommandLimits {
 impl LiveSystem {
     /// Starts the live system for `scenario`, the probe resting above the top of the thigh.
     pub fn start(scenario: Scenario) -> Result<Arc<Self>> {
+        Self::start_with_case(scenario, None)
+    }
+
+    /// Starts the live system for `scenario` on `case`'s patient with its
+    /// thrombus segments ([`LiveSystem::set_case`]), or on the scenario's
+    /// own leg for `None`.
+    pub fn start_with_case(scenario: Scenario, case: Option<&Case>) -> Result<Arc<Self>> {
+        let base_thigh = scenario.thigh.clone();
+        let mut scenario = scenario;
+        if let Some(c) = case {
+            scenario.set_patient(c.anatomy.patient())?;
+            scenario.patient.vein = echothigh_imaging::VeinState::Healthy;
+        }
         let physics = PhysicsSide::new(&scenario)?;
-        let mesh = physics.model().mesh();
-        let live_mesh = LiveMesh {
-            rest: mesh
-                .rest_positions()
-                .iter()
-                .map(|p| [p.x as f32, p.y as f32, p.z as f32])
-                .collect(),
-            triangles: mesh
-                .triangles()
-                .iter()
-                .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
-                .collect(),
-        };
+        let live_mesh = live_mesh(&physics);
         let img = scenario.live_imaging_config();
         let shared = Arc::new(Shared {
             snapshot: Mutex::new(LiveSnapshot {
@@ -180,7 +192,7 @@ impl LiveSystem {
                 compression: vec![0.0; live_mesh.rest.len()],
                 ..Default::default()
             }),
-            mesh: live_mesh,
+            mesh: Mutex::new(live_mesh),
             image_input: Mutex::new(ImageInput {
                 deformation: SectionDeformation::rest(0.04),
                 pressure: 0.0,
@@ -198,13 +210,19 @@ impl LiveSystem {
             }),
             vein: AtomicU8::new(vein_code(scenario.patient.vein)),
             haptic: Mutex::new(None),
+            section: Mutex::new(None),
             watchers: AtomicUsize::new(0),
             fault: Mutex::new(None),
         });
         let leg = physics.model().mesh().leg().cloned();
         let target = target_on_surface(&scenario, leg.as_ref(), 0.0, 0.0, LIFTED_DEPTH, 0.0)
             .map_err(anyhow::Error::msg)?;
-        let imaging = ImagingThread::spawn(shared.clone(), &scenario)?;
+        let case = case.map(|c| (c.file.name.clone(), Arc::new(c.thrombi.clone())));
+        let imaging = ImagingThread::spawn(
+            shared.clone(),
+            &scenario,
+            case.as_ref().map(|c| c.1.clone()),
+        )?;
         let inner = Inner {
             scenario,
             session: None,
@@ -212,6 +230,8 @@ impl LiveSystem {
             target,
             placement: (0.0, 0.0, 0.0),
             leg,
+            base_thigh,
+            case,
         };
         let system = Arc::new(LiveSystem {
             shared,
@@ -245,17 +265,25 @@ impl LiveSystem {
             Keep::Thigh => carried.device = None,
             Keep::ThighAndProbe => {}
         }
+        self.start_from(inner, carried, keep == Keep::Nothing)
+    }
+
+    /// Starts a session from `carried` (the thigh at rest when `at_rest`).
+    fn start_from(&self, inner: &mut Inner, carried: Carried, at_rest: bool) -> Result<()> {
         if let Ok(mut f) = self.shared.fault.lock() {
             *f = None;
         }
-        if keep == Keep::Nothing {
+        if at_rest {
             // The thigh restarts from rest: what the page reads until the
             // new physics publishes is the rest state, not the old press
             // (a stale 6 N was read after a reset under load).
-            if let Ok(mut snap) = self.shared.snapshot.lock() {
-                snap.positions.clone_from(&self.shared.mesh.rest);
-                snap.compression.iter_mut().for_each(|c| *c = 0.0);
+            let rest = self.shared.mesh.lock().map(|m| m.rest.clone());
+            if let (Ok(mut snap), Ok(rest)) = (self.shared.snapshot.lock(), rest) {
+                snap.positions.clone_from(&rest);
+                snap.compression.clear();
+                snap.compression.resize(rest.len(), 0.0);
                 snap.status.physics_force = [0.0; 3];
+                snap.status.section = None;
             }
         }
         inner.session = Some(start_session(
@@ -288,9 +316,110 @@ impl LiveSystem {
     }
 }
 
+impl LiveSystem {
+    /// Loads `case` (issue 13): the physical leg becomes its patient's
+    /// (the scenario's segment kept where it fits that femur, else the whole
+    /// femur, [`Scenario::set_patient`]), the imaging thread draws each vein
+    /// with the case's segments where the plane cuts it (the global vein
+    /// state set healthy, so that only the segments are diseased), and the
+    /// thigh and the probe restart from rest, the probe lifted over where
+    /// it was. `None` restores the scenario's own leg without thrombus.
+    /// The page must fetch the mesh again ([`LiveControl::mesh`]): its rest
+    /// positions change with the patient. Errors (a leg the mesh cannot
+    /// take) leave the running case in place.
+    pub fn set_case(&self, case: Option<&Case>) -> Result<()> {
+        let mut inner = self
+            .inner
+            .lock()
+            .map_err(|_| anyhow::anyhow!("live state poisoned"))?;
+        let mut scenario = inner.scenario.clone();
+        scenario.thigh = inner.base_thigh.clone();
+        if let Some(c) = case {
+            scenario.set_patient(c.anatomy.patient())?;
+        }
+        scenario.patient.vein = echothigh_imaging::VeinState::Healthy;
+        let physics = PhysicsSide::new(&scenario).context("the case's leg")?;
+        let leg = physics.model().mesh().leg().cloned();
+        let (theta, z, tilt) = inner.placement;
+        let target = target_on_surface(&scenario, leg.as_ref(), theta, z, LIFTED_DEPTH, tilt)
+            .map_err(anyhow::Error::msg)?;
+        let thrombi = case.map(|c| (c.file.name.clone(), Arc::new(c.thrombi.clone())));
+        // The old imaging thread stops before its leg goes.
+        let old = self.imaging.lock().ok().and_then(|mut i| i.take());
+        if let Some(t) = old {
+            if let Err(e) = t.stop() {
+                tracing::warn!("the imaging thread of the previous case: {e:#}");
+            }
+        }
+        if let Some(s) = inner.session.take() {
+            s.stop();
+        }
+        if let Ok(mut m) = self.shared.mesh.lock() {
+            *m = live_mesh(&physics);
+        }
+        self.shared.vein.store(
+            vein_code(echothigh_imaging::VeinState::Healthy),
+            Ordering::Relaxed,
+        );
+        inner.scenario = scenario;
+        inner.leg = leg;
+        inner.target = target;
+        inner.exam = false;
+        inner.case = thrombi;
+        let carried = Carried {
+            physics: Some(physics),
+            device: None,
+        };
+        self.start_from(&mut inner, carried, true)?;
+        let imaging = ImagingThread::spawn(
+            self.shared.clone(),
+            &inner.scenario,
+            inner.case.as_ref().map(|c| c.1.clone()),
+        )?;
+        if let Ok(mut slot) = self.imaging.lock() {
+            imaging.wake();
+            *slot = Some(imaging);
+        }
+        self.publish_settings(&inner);
+        Ok(())
+    }
+
+    /// The name of the loaded case, if any.
+    pub fn case_name(&self) -> Option<String> {
+        self.inner
+            .lock()
+            .ok()
+            .and_then(|i| i.case.as_ref().map(|c| c.0.clone()))
+    }
+}
+
+/// The live mesh (topology and rest positions) of `physics`' model.
+fn live_mesh(physics: &PhysicsSide) -> LiveMesh {
+    let mesh = physics.model().mesh();
+    LiveMesh {
+        rest: mesh
+            .rest_positions()
+            .iter()
+            .map(|p| [p.x as f32, p.y as f32, p.z as f32])
+            .collect(),
+        triangles: mesh
+            .triangles()
+            .iter()
+            .map(|t| [t[0] as u32, t[1] as u32, t[2] as u32])
+            .collect(),
+    }
+}
+
 impl LiveControl for LiveSystem {
+    fn set_case(&self, case: Option<&Case>) -> Result<(), String> {
+        LiveSystem::set_case(self, case).map_err(|e| format!("{e:#}"))
+    }
+
     fn mesh(&self) -> LiveMesh {
-        self.shared.mesh.clone()
+        match self.shared.mesh.lock() {
+            Ok(m) => m.clone(),
+            Err(e) => e.into_inner().clone(),
+        }
     }
 
     fn snapshot(&self, out: &mut LiveSnapshot) {
@@ -306,6 +435,9 @@ impl LiveControl for LiveSystem {
         }
         if let Ok(f) = self.shared.fault.lock() {
             out.fault.clone_from(&f);
+        }
+        if let Ok(mut r) = self.shared.section.lock() {
+            out.status.section = r.as_mut().and_then(|o| *o.read());
         }
         if let Ok(mut h) = self.shared.haptic.lock() {
             if let Some(o) = h.as_mut() {

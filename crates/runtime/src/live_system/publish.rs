@@ -3,11 +3,12 @@
 
 use super::imaging_source::{Probe, Source};
 use super::shared::{vein_of, Shared};
+use crate::live::{SectionReading, COAPTED_RATIO};
 use crate::physics_side::{self, PhysicsSide};
 use crate::scenario::Scenario;
 use crate::section::{lateral_offset, section_deformation, SectionScratch};
 use anyhow::{Context, Result};
-use echothigh_anatomy::Levels;
+use echothigh_anatomy::{Levels, Thrombi};
 use echothigh_imaging::{Anatomy, FrameInput, ImagingConfig, SectionDeformation, VeinState};
 use echothigh_model::{LegSurface, ThighGeometry};
 use echothigh_transport::ProbeMsg;
@@ -133,17 +134,28 @@ pub(super) struct ImagingThread {
 impl ImagingThread {
     /// Starts rendering `scenario`'s section from `shared`'s image input:
     /// on a patient's leg the section under the probe
-    /// ([`SectionImager`]), on the elliptic cylinder the scenario's
-    /// `[imaging.anatomy]`.
-    pub(super) fn spawn(shared: Arc<Shared>, scenario: &Scenario) -> Result<Self> {
+    /// ([`SectionImager`]), each vein with its segments of `thrombi` (a
+    /// case's, on that leg's anatomy) where the plane cuts it; on the
+    /// elliptic cylinder the scenario's `[imaging.anatomy]`. Installs a new
+    /// section reading handoff in `shared` ([`Shared::section`]).
+    pub(super) fn spawn(
+        shared: Arc<Shared>,
+        scenario: &Scenario,
+        thrombi: Option<Arc<Thrombi>>,
+    ) -> Result<Self> {
         let cfg = scenario.live_imaging_config();
         let leg = LegSurface::new(&scenario.thigh, "thigh").context("the scenario's leg")?;
+        let (reading, reading_out) = triple_buffer::triple_buffer(&None);
+        *shared
+            .section
+            .lock()
+            .map_err(|_| anyhow::anyhow!("live state poisoned"))? = Some(reading_out);
         let stop = Arc::new(AtomicBool::new(false));
         let st = stop.clone();
         let handle = std::thread::Builder::new()
             .name("imaging".into())
             .spawn(move || {
-                let r = imaging_loop(&shared, &cfg, leg, &st);
+                let r = imaging_loop(&shared, &cfg, leg, thrombi, reading, &st);
                 if let Err(e) = &r {
                     shared.report_fault("imaging", e);
                 }
@@ -174,15 +186,18 @@ impl ImagingThread {
 const IDLE_NAP: Duration = Duration::from_millis(200);
 
 /// The imaging thread's body: until `stop`, render a frame every 50 ms
-/// while a page looks, park while none does.
+/// while a page looks, park while none does; with each frame, write the
+/// reading of the section under the probe into `reading`.
 fn imaging_loop(
     shared: &Shared,
     cfg: &ImagingConfig,
     leg: Option<LegSurface>,
+    thrombi: Option<Arc<Thrombi>>,
+    mut reading: triple_buffer::Input<Option<SectionReading>>,
     stop: &AtomicBool,
 ) -> Result<()> {
     let mut vein = shared.vein.load(Ordering::Relaxed);
-    let mut source = Source::new(shared, cfg, leg, vein_of(vein))?;
+    let mut source = Source::new(shared, cfg, leg, vein_of(vein), thrombi)?;
     let mut local = SectionDeformation::rest(0.04);
     let mut pixels = vec![0u8; cfg.columns * cfg.rows];
     // A fixed-rate schedule: the render's own time does not lengthen the
@@ -214,7 +229,7 @@ fn imaging_loop(
                 orientation: i.probe_orientation,
             }
         };
-        let (renderer, lateral_offset) = source.frame(&input, vein_of(vein))?;
+        let (renderer, lateral_offset, studied) = source.frame(&input, vein_of(vein))?;
         if let Some(a) = renderer.anatomy() {
             // The drawn section's femur (the deformation falls to 0 there);
             // kept below the deepest skin displacement, which the model's
@@ -234,7 +249,10 @@ fn imaging_loop(
         renderer
             .render_into(&frame, &mut pixels)
             .map_err(|e| anyhow::anyhow!("imaging: rendering a frame: {e}"))?;
-        {
+        let lumens = renderer
+            .lumens(&frame)
+            .map_err(|e| anyhow::anyhow!("imaging: the frame's lumens: {e}"))?;
+        let frame_no = {
             let mut slot = shared
                 .image
                 .lock()
@@ -242,7 +260,20 @@ fn imaging_loop(
             slot.pixels.copy_from_slice(&pixels);
             slot.frame += 1;
             slot.time = input.time;
-        }
+            slot.frame
+        };
+        reading.write(lumens.map(|l| {
+            let vein_lumen_ratio = l.vein.area / l.vein.rest_area;
+            SectionReading {
+                s: studied.map_or(0.0, |(s, _)| s),
+                vein: studied.map(|(_, id)| id),
+                vein_lumen_ratio,
+                artery_lumen_ratio: l.artery.area / l.artery.rest_area,
+                walls_met: vein_lumen_ratio < COAPTED_RATIO,
+                frame: frame_no,
+                time: input.time,
+            }
+        }));
         next += period;
         let now = Instant::now();
         if next > now {
@@ -269,10 +300,10 @@ mod tests {
     #[test]
     fn a_failing_imaging_thread_is_joined_and_reports_its_error() {
         let shared = Arc::new(Shared {
-            mesh: LiveMesh {
+            mesh: Mutex::new(LiveMesh {
                 rest: Vec::new(),
                 triangles: Vec::new(),
-            },
+            }),
             snapshot: Mutex::new(LiveSnapshot::default()),
             image_input: Mutex::new(ImageInput {
                 deformation: SectionDeformation::rest(0.04),
@@ -291,6 +322,7 @@ mod tests {
             }),
             vein: AtomicU8::new(0),
             haptic: Mutex::new(None),
+            section: Mutex::new(None),
             watchers: AtomicUsize::new(1),
             fault: Mutex::new(None),
         });
@@ -298,7 +330,7 @@ mod tests {
         // here behind the loader's back to make the renderer fail.
         let mut scenario = Scenario::default();
         scenario.imaging.live_rows = 0;
-        let thread = ImagingThread::spawn(shared.clone(), &scenario).unwrap();
+        let thread = ImagingThread::spawn(shared.clone(), &scenario, None).unwrap();
         let err = thread.stop().unwrap_err();
         assert!(format!("{err:#}").contains("imaging"), "{err:#}");
         let fault = shared.fault.lock().unwrap().clone();

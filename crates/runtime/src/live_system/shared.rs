@@ -1,7 +1,7 @@
 //! The state the live system's threads share, and the small types they
 //! hand each other.
 
-use crate::live::{LiveMesh, LiveSnapshot};
+use crate::live::{LiveMesh, LiveSnapshot, SectionReading};
 use echothigh_imaging::{SectionDeformation, VeinState};
 use std::sync::atomic::{AtomicU8, AtomicUsize};
 use std::sync::Mutex;
@@ -68,8 +68,9 @@ pub(super) struct ImageSlot {
 
 /// What the threads share (the real-time side only `try_lock`s).
 pub(super) struct Shared {
-    /// Static mesh topology.
-    pub mesh: LiveMesh,
+    /// The mesh's topology and rest positions (replaced when a case
+    /// changes the patient's leg, [`super::LiveSystem::set_case`]).
+    pub mesh: Mutex<LiveMesh>,
     /// Latest physics state.
     pub snapshot: Mutex<LiveSnapshot>,
     /// Latest input of the imaging thread.
@@ -80,6 +81,10 @@ pub(super) struct Shared {
     pub vein: AtomicU8,
     /// The haptic loop's status handoff of the running session.
     pub haptic: Mutex<Option<triple_buffer::Output<HapticStatus>>>,
+    /// The imaging thread's section reading handoff (lock-free for the
+    /// imaging thread, which owns the input side; replaced with each new
+    /// imaging thread).
+    pub section: Mutex<Option<triple_buffer::Output<Option<SectionReading>>>>,
     /// Pages looking at the live state (the imaging thread idles at 0).
     pub watchers: AtomicUsize,
     /// The last error of a thread of the live system, for the page; cleared

@@ -3,7 +3,8 @@
 
 use super::super::protocol::*;
 use echothigh_runtime::live::{
-    CouplingMode, LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, VeinState,
+    CouplingMode, LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, SectionReading, StructureId,
+    VeinState,
 };
 use proptest::prelude::*;
 
@@ -181,6 +182,15 @@ fn sanitized_zeroes_every_non_finite_number_and_keeps_the_rest() {
         exam_playing: true,
         level_s: f64::NAN,
         level: Some(echothigh_runtime::live::LegLevel::Popliteal),
+        section: Some(SectionReading {
+            s: f64::NAN,
+            vein: Some(StructureId::Pv),
+            vein_lumen_ratio: f64::INFINITY,
+            artery_lumen_ratio: 0.9,
+            walls_met: false,
+            frame: 7,
+            time: f64::NEG_INFINITY,
+        }),
     };
     let expected = LiveStatus {
         time: 0.0,
@@ -201,9 +211,48 @@ fn sanitized_zeroes_every_non_finite_number_and_keeps_the_rest() {
         exam_playing: true,
         level_s: 0.0,
         level: Some(echothigh_runtime::live::LegLevel::Popliteal),
+        section: Some(SectionReading {
+            s: 0.0,
+            vein: Some(StructureId::Pv),
+            vein_lumen_ratio: 0.0,
+            artery_lumen_ratio: 0.9,
+            walls_met: false,
+            frame: 7,
+            time: 0.0,
+        }),
     };
     assert_eq!(status.sanitized(), expected);
     assert_eq!(expected.sanitized(), expected, "finite values must be kept");
+}
+
+/// The state JSON carries the section reading (issue 13) under `section`,
+/// additive: its fields by these names, the vein by its printed id, and
+/// `null` before the imaging thread's first frame.
+#[test]
+fn the_state_carries_the_section_reading() {
+    let mut snap = LiveSnapshot::default();
+    snap.status.section = Some(SectionReading {
+        s: 0.18,
+        vein: Some(StructureId::Fv),
+        vein_lumen_ratio: 0.02,
+        artery_lumen_ratio: 0.97,
+        walls_met: true,
+        frame: 12,
+        time: 3.5,
+    });
+    let state = ViewState::from_snapshot(&snap, None, ExamStatus::default());
+    let j = serde_json::to_value(ServerMessage::State(state)).unwrap();
+    let r = &j["section"];
+    assert_eq!(r["s"], 0.18);
+    assert_eq!(r["vein"], "fv");
+    assert_eq!(r["vein_lumen_ratio"], 0.02);
+    assert_eq!(r["artery_lumen_ratio"], 0.97);
+    assert_eq!(r["walls_met"], true);
+    assert_eq!(r["frame"], 12);
+    assert_eq!(r["time"], 3.5);
+    let none = ViewState::from_snapshot(&LiveSnapshot::default(), None, ExamStatus::default());
+    let j = serde_json::to_value(ServerMessage::State(none)).unwrap();
+    assert!(j["section"].is_null(), "{j}");
 }
 
 #[test]
