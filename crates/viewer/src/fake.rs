@@ -3,11 +3,11 @@
 //! `F = k₀ d / (1 − d/d_max)` (the shape of the paper's normal spring
 //! `x/(ax + b)`), so the server's tests see forces that rise with the press.
 
+use echothigh_cases::Case;
 use echothigh_runtime::live::{
     CommandLimits, CouplingMode, ImageInfo, LiveCommand, LiveControl, LiveMesh, LiveSnapshot,
     LiveStatus, VeinState,
 };
-use echothigh_cases::Case;
 use echothigh_runtime::live::{SectionReading, COAPTED_RATIO};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{mpsc, Mutex};
@@ -62,6 +62,16 @@ impl FakeLive {
             i.rate = 100.0;
         }
         f
+    }
+
+    /// The loaded case's name.
+    pub fn case_name(&self) -> Option<String> {
+        self.inner
+            .lock()
+            .unwrap()
+            .case
+            .as_ref()
+            .map(|c| c.file.name.clone())
     }
 
     /// Commands received so far.
@@ -253,12 +263,26 @@ pub const FAKE_CLOSING: f64 = 8.0;
 /// Force (N) above which the double's artery deforms, by `(f − F)/40 N`.
 pub const FAKE_ARTERY_ONSET: f64 = 10.0;
 
+/// `s` (m below the inguinal ligament) of the probe at `z` (m) on the
+/// double's cylinder: its length spans the loaded case's leg, groin at
+/// `z = LENGTH/2`.
+fn s_of(case: &Case, z: f64) -> f64 {
+    ((LENGTH / 2.0 - z) / LENGTH * case.anatomy.length()).clamp(0.0, case.anatomy.length())
+}
+
+/// The probe's `z` (m) over `s` on the loaded case's leg ([`s_of`]'s inverse).
+pub fn z_of(fake: &FakeLive, s: f64) -> f64 {
+    let i = fake.inner.lock().unwrap();
+    let len = i.case.as_ref().map_or(LENGTH, |c| c.anatomy.length());
+    LENGTH / 2.0 - s / len * LENGTH
+}
+
 /// The double's reading of a loaded case's section with the probe at `z`
-/// (m, `s = LENGTH/2 − z` below the groin end) pressing with `f` (N): the
+/// (m, [`s_of`]) pressing with `f` (N): the
 /// deep vein there; healthy, it closes linearly by [`FAKE_CLOSING`]; where
 /// the case's thrombus fills it (fill ≥ ½), it keeps ≥ 0.9 of its lumen.
 fn reading(case: &Case, z: f64, f: f64, time: f64) -> SectionReading {
-    let s = (LENGTH / 2.0 - z).clamp(0.0, case.anatomy.length());
+    let s = s_of(case, z);
     let vein = case.anatomy.deep_vein_at(s);
     let filled = case.thrombi.state(vein, s).fill >= 0.5;
     let ratio = if filled {

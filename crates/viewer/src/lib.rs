@@ -168,7 +168,8 @@ pub async fn serve_on(
     shutdown: impl std::future::Future<Output = ()> + Send + 'static,
 ) -> Result<()> {
     let state = Arc::new(server::AppState::new(control, session, config));
-    let observer = exam::ExamObserver::spawn(state.clone()).context("starting the exam observer")?;
+    let observer =
+        exam::ExamObserver::spawn(state.clone()).context("starting the exam observer")?;
     let listener = idle::IdleListener::new(listener, config.idle_timeout);
     let served = axum::serve(listener, server::router(state.clone()))
         .with_graceful_shutdown(shutdown)

@@ -19,8 +19,8 @@
 //!
 //! Units: SI (m, N, s, Hz), thigh frame (z along the axis, y anterior).
 
-use echothigh_runtime::live::{LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, VeinState};
 use echothigh_exam::Finding;
+use echothigh_runtime::live::{LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, VeinState};
 use serde::{Deserialize, Serialize};
 
 /// Version carried by every JSON envelope and binary frame header.

@@ -137,10 +137,9 @@ impl AppState {
                 }
                 Ok(())
             }
-            ClientMessage::Viewer(ViewerCommand::ExamCall { site, finding }) => self
-                .exam()
-                .call(&site, finding)
-                .map_err(|e| e.to_string()),
+            ClientMessage::Viewer(ViewerCommand::ExamCall { site, finding }) => {
+                self.exam().call(&site, finding).map_err(|e| e.to_string())
+            }
             ClientMessage::Viewer(ViewerCommand::ExamFinish) => {
                 self.exam().finish().map_err(|e| e.to_string())
             }

@@ -11,4 +11,4 @@ pub mod sink;
 
 pub use observer::{sample, ExamObserver};
 pub use plan::ExamPlan;
-pub use session::{ExamError, ExamSession};
+pub use session::ExamSession;

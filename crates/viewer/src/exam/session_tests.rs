@@ -6,7 +6,10 @@ fn plan(names: &[&str]) -> ExamPlan {
     ExamPlan {
         trainee: Some("ada".into()),
         protocol: Protocol::TwoPoint,
-        cases: names.iter().map(|n| echothigh_cases::builtin(n).unwrap()).collect(),
+        cases: names
+            .iter()
+            .map(|n| echothigh_cases::builtin(n).unwrap())
+            .collect(),
     }
 }
 
@@ -26,12 +29,19 @@ fn sample(t: f64, f: f64, vein: &'static str, s: f64, r: f64) -> ExamSample {
 #[test]
 fn a_case_is_examined_scored_and_revealed_only_when_finished() {
     let sink = MemorySink::default();
-    let mut x = ExamSession::new(plan(&["normal-average", "popliteal-acute"]), Box::new(sink.clone()), false);
+    let mut x = ExamSession::new(
+        plan(&["normal-average", "popliteal-acute"]),
+        Box::new(sink.clone()),
+        false,
+    );
     assert!(!x.status().active);
     let name = x.start().unwrap().file.name.clone();
     assert_eq!(name, "normal-average");
     let st = x.status().clone();
-    assert!(st.active && st.open && st.last.is_none(), "the truth stays hidden while open");
+    assert!(
+        st.active && st.open && st.last.is_none(),
+        "the truth stays hidden while open"
+    );
     assert_eq!((st.case_number, st.cases_total, st.sites.len()), (1, 2, 2));
     assert!(matches!(x.start(), Err(ExamError::CaseOpen(1))));
 
@@ -47,23 +57,45 @@ fn a_case_is_examined_scored_and_revealed_only_when_finished() {
     assert!(x.case_time(Instant::now()).is_some());
     let rev = x.status().rev;
     for (k, f) in [0.0, 4.0, 9.0, 4.0, 0.2].into_iter().enumerate() {
-        x.observe(&sample(1.0 + 0.1 * k as f64, f, "cfv", cfv.s, 1.0 - f / 10.0)).unwrap();
+        x.observe(&sample(
+            1.0 + 0.1 * k as f64,
+            f,
+            "cfv",
+            cfv.s,
+            1.0 - f / 10.0,
+        ))
+        .unwrap();
     }
     let st = x.status().clone();
     assert_eq!(st.presses, 1);
     assert!(st.rev > rev, "the page hears of the press");
-    assert!(st.sites[0].done, "the CFV closed (0.1 at 9 N): its item is done");
-    assert_eq!(st.coverage.iter().filter(|b| b.state == BinState::Closed).count(), 1);
+    assert!(
+        st.sites[0].done,
+        "the CFV closed (0.1 at 9 N): its item is done"
+    );
+    assert_eq!(
+        st.coverage
+            .iter()
+            .filter(|b| b.state == BinState::Closed)
+            .count(),
+        1
+    );
 
     x.call("cfv", Finding::Normal).unwrap();
     x.call("popliteal", Finding::AcuteDvt).unwrap();
     assert_eq!(x.status().sites[1].call, Some(Finding::AcuteDvt));
-    assert!(x.call("fv-mid", Finding::Normal).is_err(), "not a two-point site");
+    assert!(
+        x.call("fv-mid", Finding::Normal).is_err(),
+        "not a two-point site"
+    );
     x.finish().unwrap();
     let st = x.status().clone();
     assert!(!st.open && st.sites.is_empty());
     let last = st.last.expect("revealed");
-    assert_eq!((last.case.as_str(), last.diagnosis.as_str()), ("normal-average", "normal"));
+    assert_eq!(
+        (last.case.as_str(), last.diagnosis.as_str()),
+        ("normal-average", "normal")
+    );
     assert_eq!((last.score.calls_correct, last.score.calls_total), (1, 2));
     assert!(last.truth.iter().all(|t| t.kind == "normal"));
     assert_eq!((st.cases_done, st.calls_correct, st.calls_total), (1, 1, 2));
@@ -78,11 +110,19 @@ fn a_case_is_examined_scored_and_revealed_only_when_finished() {
 
 #[test]
 fn the_plan_ends_or_cycles() {
-    let mut x = ExamSession::new(plan(&["normal-average"]), Box::new(MemorySink::default()), false);
+    let mut x = ExamSession::new(
+        plan(&["normal-average"]),
+        Box::new(MemorySink::default()),
+        false,
+    );
     x.start().unwrap();
     x.finish().unwrap();
     assert!(matches!(x.start(), Err(ExamError::NoMoreCases(1))));
-    let mut y = ExamSession::new(plan(&["normal-average"]), Box::new(MemorySink::default()), true);
+    let mut y = ExamSession::new(
+        plan(&["normal-average"]),
+        Box::new(MemorySink::default()),
+        true,
+    );
     for k in 1..=3 {
         y.start().unwrap();
         y.finish().unwrap();
@@ -92,11 +132,18 @@ fn the_plan_ends_or_cycles() {
 
 #[test]
 fn leaving_drops_the_open_case_unscored() {
-    let mut x = ExamSession::new(plan(&["normal-average", "popliteal-acute"]), Box::new(MemorySink::default()), false);
+    let mut x = ExamSession::new(
+        plan(&["normal-average", "popliteal-acute"]),
+        Box::new(MemorySink::default()),
+        false,
+    );
     x.start().unwrap();
     x.stop();
     let st = x.status();
     assert!(!st.active && !st.open && st.last.is_none() && st.cases_done == 0);
     assert!(matches!(x.finish(), Err(ExamError::NoCase)));
-    assert!(matches!(x.call("cfv", Finding::Normal), Err(ExamError::NoCase)));
+    assert!(matches!(
+        x.call("cfv", Finding::Normal),
+        Err(ExamError::NoCase)
+    ));
 }

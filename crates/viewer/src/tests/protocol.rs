@@ -240,7 +240,7 @@ fn the_state_carries_the_section_reading() {
         frame: 12,
         time: 3.5,
     });
-    let state = ViewState::from_snapshot(&snap, None, ExamStatus::default());
+    let state = ViewState::from_snapshot(&snap, None, None);
     let j = serde_json::to_value(ServerMessage::State(state)).unwrap();
     let r = &j["section"];
     assert_eq!(r["s"], 0.18);
@@ -250,7 +250,7 @@ fn the_state_carries_the_section_reading() {
     assert_eq!(r["walls_met"], true);
     assert_eq!(r["frame"], 12);
     assert_eq!(r["time"], 3.5);
-    let none = ViewState::from_snapshot(&LiveSnapshot::default(), None, ExamStatus::default());
+    let none = ViewState::from_snapshot(&LiveSnapshot::default(), None, None);
     let j = serde_json::to_value(ServerMessage::State(none)).unwrap();
     assert!(j["section"].is_null(), "{j}");
 }
@@ -283,9 +283,11 @@ fn every_command_decodes_from_its_json() {
     }
     let viewer = [
         ViewerCommand::ExamStart,
-        ViewerCommand::ExamAnswer {
-            compressible: false,
+        ViewerCommand::ExamCall {
+            site: "fv@190mm".into(),
+            finding: echothigh_exam::Finding::ChronicPostThrombotic,
         },
+        ViewerCommand::ExamFinish,
         ViewerCommand::ExamStop,
     ];
     for cmd in viewer {

@@ -2,6 +2,8 @@
 //! double: hello, state pushes, binary frames, commands, refusals that keep
 //! the connection up, the exam flow, cross-origin refusal, static files.
 
+use super::super::exam::sink::MemorySink;
+use super::super::exam::{ExamPlan, ExamSession};
 use super::super::fake::FakeLive;
 use super::super::protocol::{Envelope, FrameHeader, FrameKind, ServerMessage, ViewState};
 use super::super::server::loopback_host;
@@ -31,8 +33,23 @@ async fn start_with(fake: Arc<FakeLive>, idle_timeout: Duration) -> std::net::So
         allow_remote: false,
         idle_timeout,
     };
-    tokio::spawn(serve_on(listener, fake, config, std::future::pending()));
+    tokio::spawn(serve_on(
+        listener,
+        fake,
+        config,
+        practice(),
+        std::future::pending(),
+    ));
     addr
+}
+
+/// The anonymous practice session of `echothigh view` (fixed order).
+fn practice() -> ExamSession {
+    ExamSession::new(
+        ExamPlan::practice(1).unwrap(),
+        Box::new(MemorySink::default()),
+        true,
+    )
 }
 
 async fn connect(addr: std::net::SocketAddr) -> Client {
@@ -173,7 +190,7 @@ async fn hello_then_state_surface_and_image_frames() {
     );
     let s = next_state(&mut ws, |_| true).await;
     assert_eq!(s.vein, Some(VeinState::Healthy));
-    assert!(!s.exam.open);
+    assert!(!s.exam.is_some_and(|e| e.open));
 }
 
 #[tokio::test]
@@ -237,40 +254,100 @@ async fn controls_reach_the_runtime() {
     );
 }
 
+/// Issue 14, end to end against the double: a case is loaded into the
+/// runtime, its truth stays on the server, the observer thread detects the
+/// trainee's presses from the live state (the double's section reading: a
+/// healthy vein closes by 8 N, the popliteal thrombus keeps ≥ 0.9 of its
+/// lumen, the artery deforms from 10 N), the calls are scored on finish and
+/// the truth revealed, and the sink got every record as it happened.
 #[tokio::test]
-async fn exam_hides_the_vein_scores_and_reveals() {
+async fn exam_loads_a_case_detects_presses_and_reveals_on_finish() {
     let fake = Arc::new(FakeLive::new());
-    let mut ws = connect(start(fake.clone()).await).await;
-    send(&mut ws, r#"{"type":"exam_answer","compressible":true}"#).await;
-    assert!(next_error(&mut ws).await.contains("no exam question"));
-    send(&mut ws, r#"{"type":"exam_start"}"#).await;
-    let s = next_state(&mut ws, |s| s.exam.open).await;
-    assert_eq!((s.vein, s.exam.question), (None, 1));
-    // The drawn state went to the runtime, followed by a reset.
-    let cmds = fake.commands();
-    assert!(matches!(cmds[cmds.len() - 2], LiveCommand::SetVein { .. }));
-    assert_eq!(cmds[cmds.len() - 1], LiveCommand::Reset);
-    let truth = fake.vein();
-    send(&mut ws, r#"{"type":"set_vein","vein":"healthy"}"#).await;
-    assert!(next_error(&mut ws).await.contains("hidden"));
-    assert_eq!(fake.vein(), truth, "the page changed the hidden vein");
+    let sink = MemorySink::default();
+    let plan = ExamPlan {
+        trainee: Some("ada".into()),
+        protocol: echothigh_exam::Protocol::TwoPoint,
+        cases: vec![echothigh_cases::builtin("popliteal-acute").unwrap()],
+    };
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let session = ExamSession::new(plan, Box::new(sink.clone()), false);
+    let config = ServerConfig {
+        state_rate: 100.0,
+        ..ServerConfig::default()
+    };
+    tokio::spawn(serve_on(
+        listener,
+        fake.clone(),
+        config,
+        session,
+        std::future::pending(),
+    ));
+    let mut ws = connect(addr).await;
     send(
         &mut ws,
-        r#"{"type":"probe","theta":0,"z":0,"depth":0.02,"tilt":0}"#,
+        r#"{"type":"exam_call","site":"cfv","finding":"normal"}"#,
     )
     .await;
-    let pressed = next_state(&mut ws, |s| s.exam.peak_force > 5.0).await;
-    send(&mut ws, r#"{"type":"exam_answer","compressible":false}"#).await;
-    let s = next_state(&mut ws, |s| !s.exam.open).await;
-    let last = s.exam.last.expect("no result");
-    assert_eq!(last.truth, truth);
-    assert_eq!(last.correct, truth != VeinState::Healthy);
-    assert!(last.peak_force >= pressed.exam.peak_force);
-    assert_eq!(
-        (s.exam.answered, s.exam.correct),
-        (1, u32::from(last.correct))
-    );
-    assert_eq!(s.vein, Some(truth), "revealed after the answer");
+    assert!(next_error(&mut ws).await.contains("no case is open"));
+    send(&mut ws, r#"{"type":"exam_start"}"#).await;
+    let s = next_state(&mut ws, |s| s.exam.as_ref().is_some_and(|e| e.open)).await;
+    let e = s.exam.unwrap();
+    assert_eq!((e.case_number, e.cases_total, s.vein), (1, 1, None));
+    assert!(e.last.is_none(), "no truth while the case is open");
+    let names: Vec<&str> = e.sites.iter().map(|x| x.name.as_str()).collect();
+    assert_eq!(names, ["cfv", "popliteal"]);
+    assert_eq!(fake.case_name().as_deref(), Some("popliteal-acute"));
+    send(&mut ws, r#"{"type":"set_vein","vein":"healthy"}"#).await;
+    assert!(next_error(&mut ws).await.contains("the case's"));
+
+    // Press each site, then release: 12 N at the CFV (closes), 20 N at the
+    // popliteal (stays open, the artery deforms).
+    for (k, (site, depth)) in [(&e.sites[0], 0.015), (&e.sites[1], 0.02)]
+        .into_iter()
+        .enumerate()
+    {
+        let z = crate::fake::z_of(&fake, site.s);
+        let probe = format!(r#"{{"type":"probe","theta":0,"z":{z},"depth":{depth},"tilt":0}}"#);
+        send(&mut ws, &probe).await;
+        next_state(&mut ws, |s| s.status.rendered_force[1] > 10.0).await;
+        // A few observer samples (50 Hz) at the peak.
+        tokio::time::sleep(Duration::from_millis(200)).await;
+        send(&mut ws, r#"{"type":"lift"}"#).await;
+        let s = next_state(&mut ws, |s| {
+            s.exam.as_ref().is_some_and(|e| e.presses == k as u32 + 1)
+        })
+        .await;
+        assert!(s.exam.unwrap().sites[k].done, "site {} covered", site.name);
+    }
+    send(
+        &mut ws,
+        r#"{"type":"exam_call","site":"cfv","finding":"normal"}"#,
+    )
+    .await;
+    send(
+        &mut ws,
+        r#"{"type":"exam_call","site":"popliteal","finding":"acute_dvt"}"#,
+    )
+    .await;
+    send(&mut ws, r#"{"type":"exam_finish"}"#).await;
+    let s = next_state(&mut ws, |s| {
+        s.exam.as_ref().is_some_and(|e| e.last.is_some())
+    })
+    .await;
+    let e = s.exam.unwrap();
+    let last = e.last.unwrap();
+    assert_eq!(last.diagnosis, "acute_dvt");
+    assert_eq!((last.score.calls_correct, last.score.calls_total), (2, 2));
+    assert_eq!(last.score.coverage, 1.0);
+    assert!(last
+        .truth
+        .iter()
+        .any(|t| t.vein == "pv" && t.kind == "acute_occlusive"));
+    let cases = sink.cases.lock().unwrap();
+    let log = cases[0].1.lock().unwrap();
+    assert_eq!((log.events.len(), log.calls.len()), (2, 2));
+    assert_eq!(log.score.as_ref(), Some(&last.score));
 }
 
 #[tokio::test]
@@ -392,6 +469,7 @@ async fn serve_test_double() {
         listener,
         Arc::new(FakeLive::new()),
         ServerConfig::default(),
+        practice(),
         stop,
     )
     .await
