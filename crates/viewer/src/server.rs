@@ -57,6 +57,9 @@ pub struct AppState {
     /// The connection that drives the probe (the first one; `None` once it
     /// closed), and the last connection number given.
     owner: Mutex<(Option<u64>, u64)>,
+    /// Grows when the live mesh changes (a case's leg loaded): each
+    /// connection then sends a new `hello` with the mesh.
+    mesh_epoch: std::sync::atomic::AtomicU64,
 }
 
 impl AppState {
@@ -67,6 +70,7 @@ impl AppState {
             exam: Mutex::new(exam),
             config,
             owner: Mutex::new((None, 0)),
+            mesh_epoch: std::sync::atomic::AtomicU64::new(0),
         }
     }
 
@@ -135,6 +139,9 @@ impl AppState {
                     self.exam().abandon();
                     return Err(format!("could not load the exam's case: {e}"));
                 }
+                // The patient's leg has its own rest shape.
+                self.mesh_epoch
+                    .fetch_add(1, std::sync::atomic::Ordering::AcqRel);
                 Ok(())
             }
             ClientMessage::Viewer(ViewerCommand::ExamCall { site, finding }) => {
@@ -332,6 +339,8 @@ struct Conn {
     pixels: Vec<u8>,
     /// The exam status's revision last sent on this connection.
     exam_rev: Option<u64>,
+    /// [`AppState::mesh_epoch`] of the mesh this connection sent.
+    mesh_epoch: u64,
 }
 
 impl Conn {
@@ -347,6 +356,7 @@ impl Conn {
             snap: LiveSnapshot::default(),
             pixels: Vec::new(),
             exam_rev: None,
+            mesh_epoch: 0,
         }
     }
 }
@@ -450,6 +460,19 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
     if conn.sent - conn.acked >= CREDIT || !conn.budget.allows() {
         return Vec::new();
     }
+    let mut out = Vec::new();
+    let epoch = app.mesh_epoch.load(std::sync::atomic::Ordering::Acquire);
+    if epoch != conn.mesh_epoch {
+        // A new leg: its mesh first, then the whole surface again.
+        conn.mesh_epoch = epoch;
+        conn.wire = WireState::default();
+        let hello = json(ServerMessage::Hello {
+            mesh: app.control.mesh(),
+            state_rate: app.config.state_rate,
+        });
+        conn.budget.spend(hello.to_text().map_or(0, str::len));
+        out.push(hello);
+    }
     app.control.snapshot(&mut conn.snap);
     conn.sent += 1;
     let mut state = app.view_state(&conn.snap, &mut conn.exam_rev);
@@ -457,7 +480,7 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
     state.observer = !app.drives(conn.id, false);
     let state = json(ServerMessage::State(state));
     conn.budget.spend(state.to_text().map_or(0, str::len));
-    let mut out = vec![state];
+    out.push(state);
     if conn.budget.allows() {
         if let Some(surface) = conn.wire.surface(&conn.snap) {
             conn.budget.spend(surface.len());

@@ -127,9 +127,7 @@ export function showStatus(s, fps) {
   set('st-time', `${s.time.toFixed(2)} s`);
   set('st-fps', `${fps.toFixed(0)} frames/s`);
   set('st-vein', s.vein ?? 'hidden (exam)');
-  // The imaged section (the imaging thread's reading): which vein the image studies.
-  const cut = s.section && s.section.vein ? ` · image: ${s.section.vein} at ${(s.section.s * 100).toFixed(1)} cm` : '';
-  set('st-level', s.level ? `${LEVEL_NAMES[s.level] ?? s.level}, ${(s.level_s * 100).toFixed(1)} cm below the groin${cut}` : '–');
+  set('st-level', s.level ? `${LEVEL_NAMES[s.level] ?? s.level}, ${(s.level_s * 100).toFixed(1)} cm below the groin` : '–');
   const fault = document.getElementById('fault');
   fault.hidden = !s.fault;
   fault.textContent = s.fault ? `Simulation stopped: ${s.fault}. Press Reset to restart it.` : '';

@@ -291,7 +291,17 @@ async fn exam_loads_a_case_detects_presses_and_reveals_on_finish() {
     .await;
     assert!(next_error(&mut ws).await.contains("no case is open"));
     send(&mut ws, r#"{"type":"exam_start"}"#).await;
-    let s = next_state(&mut ws, |s| s.exam.as_ref().is_some_and(|e| e.open)).await;
+    // The case's leg has its own rest shape: a new `hello` with its mesh
+    // comes, and the open case's status (sent once, when it changed).
+    let (mut hello, mut open) = (false, None);
+    while !(hello && open.is_some()) {
+        match next_json(&mut ws, |m| !matches!(m, ServerMessage::Error { .. })).await {
+            ServerMessage::Hello { .. } => hello = true,
+            ServerMessage::State(s) if s.exam.as_ref().is_some_and(|e| e.open) => open = Some(s),
+            _ => {}
+        }
+    }
+    let s = open.unwrap();
     let e = s.exam.unwrap();
     assert_eq!((e.case_number, e.cases_total, s.vein), (1, 1, None));
     assert!(e.last.is_none(), "no truth while the case is open");
