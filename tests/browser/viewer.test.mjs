@@ -5,8 +5,8 @@
 // checks: the 3D canvas and the image canvas draw non-blank pixels; dragging
 // the probe over the thigh raises the force; the vein state switches; a
 // malformed message gets an error back and the connection stays up; one exam
-// question is answered and scored; at 1280×800 and 1024×768 the 3D view,
-// the image, the gauge and the exam's answer buttons fit in the viewport
+// case is pressed, called, finished and revealed; at 1280×800 and 1024×768 the 3D view,
+// the image, the gauge and the exam's checklist and finish button fit in the viewport
 // together (issue 19, screenshots 05-layout-*.png); then, at 1280×800 with the page's CPU
 // throttled (CDP Emulation.setCPUThrottlingRate), the lag from 50 commands to
 // their effect on the state and on the image, measured in the page, and the
@@ -291,39 +291,54 @@ try {
   check('a malformed message gets an error and the connection stays up', true,
     await page.evaluate(() => window.echothigh.lastError));
 
-  // One exam question (the session score may hold earlier answers).
-  const examBefore = await page.evaluate(() => window.echothigh.state.exam);
+  // One exam case (issue 14; `view`'s practice session draws the library's
+  // cases, three-point): the truth stays on the server, the checklist shows
+  // a call per site, a press and its release are detected from the live
+  // state, a call is recorded, and finishing reveals the truth and the score.
   await page.click('#exam-start');
-  await until(page, () => window.echothigh.state.exam.open && window.echothigh.state.vein === null,
-    null, 'an open exam question with the vein hidden');
+  const opened = await until(page, () => {
+    const e = window.echothigh.state.exam;
+    return e && e.open && window.echothigh.state.vein === null ? e : null;
+  }, null, 'an open exam case with the vein hidden');
   check('exam hides the vein state', await page.isDisabled('#vein'));
+  const selects = await page.$$('#exam-sites select');
+  check('the protocol checklist has a call per site', opened.sites.length === 3 && selects.length === 3 &&
+    opened.last === null, opened.sites.map((x) => x.name).join(', '));
+  await until(page, () => window.echothigh.state.section !== null, null, 'a reading of the imaged section');
   await page.mouse.move(start.x, start.y);
   await page.mouse.down();
   await page.mouse.move(start.x + 20, start.y, { steps: 5 });
-  await until(page, () => window.echothigh.state.exam.peak_force > 1.0, null, 'a press during the exam');
+  await until(page, () => Math.hypot(...window.echothigh.state.rendered_force) > 3.0, null, 'a press during the exam');
   await page.mouse.up();
-  await page.click('#answer-no');
-  const exam = await until(page, () => {
+  await page.click('#lift');
+  const pressed = await until(page, () => {
+    const e = window.echothigh.state.exam;
+    return e.presses >= 1 ? e : null;
+  }, null, 'the press detected once released');
+  await page.selectOption(`#exam-sites select[data-site="${opened.sites[0].name}"]`, 'normal');
+  await until(page, (n) => window.echothigh.state.exam.sites[0].call === 'normal', null, 'the call recorded');
+  await page.click('#exam-finish');
+  const finished = await until(page, () => {
     const e = window.echothigh.state.exam;
     return !e.open && e.last ? e : null;
-  }, null, 'the exam result');
+  }, null, 'the case finished and revealed');
   const shown = await page.textContent('#exam-result');
-  check('one exam question answered and scored',
-    exam.answered === examBefore.answered + 1 &&
-      exam.correct === examBefore.correct + (exam.last.correct ? 1 : 0) &&
-      exam.last.correct === (exam.last.truth !== 'healthy') && shown.includes('the vein was'),
-    `${shown} · score ${exam.correct}/${exam.answered}`);
+  const sc = finished.last.score;
+  check('one exam case pressed, called, finished and revealed',
+    finished.cases_done === opened.cases_done + 1 && sc.calls_total === 3 && sc.sites[0].call === 'normal' &&
+      shown.includes(finished.last.title) && shown.includes(`Calls ${sc.calls_correct} / 3`),
+    `${pressed.presses} press(es), peak ${pressed.peak_force.toFixed(1)} N · ${shown}`);
   await page.screenshot({ path: join(shots, '03-exam.png') });
 
   // Layout (issue 19, "fits a laptop"): at 1280×800 and 1024×768, with an
-  // exam question open (its answer buttons enabled), the 3D view, the image
-  // canvas, the gauge and the answer buttons lie inside the viewport and are
+  // exam case open (its finish button enabled), the 3D view, the image
+  // canvas, the gauge, the checklist and the finish button lie inside the viewport and are
   // not hidden behind something else or scrolled out of a panel: the point
   // at the middle of each is the element itself (or a child of it). Before
   // this layout, at 1280×800 the image was scrolled off the top of the right
   // column when the exam was in view.
   await page.click('#exam-start');
-  await until(page, () => window.echothigh.state.exam.open, null, 'an open exam question for the layout');
+  await until(page, () => window.echothigh.state.exam.open, null, 'an open exam case for the layout');
   // The error toast of the malformed message above (shown 4 s) floats over
   // the page's corner; it is transient, so the check waits for it to go.
   await until(page, () => document.getElementById('toast').classList.contains('hidden'), null, 'the toast to hide');
@@ -336,7 +351,7 @@ try {
       const hit = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2);
       return { id, left: r.left, top: r.top, right: r.right, bottom: r.bottom,
         visible: !!hit && el.contains(hit), on: hit ? hit.id || hit.tagName : null, disabled: !!el.disabled };
-    }), ['scene', 'echo', 'gauge', 'answer-yes', 'answer-no']);
+    }), ['scene', 'echo', 'gauge', 'exam-sites', 'exam-finish']);
     const vp = { width, height };
     // Every box has a size (a collapsed canvas would be "inside" trivially)
     // and lies within [0, width] × [0, height] of the viewport (CSS pixels).
@@ -345,8 +360,8 @@ try {
     await page.screenshot({ path: join(shots, `05-layout-${width}x${height}.png`) });
     const fmt = (b) => `${b.id} [${b.left.toFixed(0)},${b.top.toFixed(0)}]–[${b.right.toFixed(0)},${b.bottom.toFixed(0)}]` +
       (b.visible ? '' : ` hidden under ${b.on}`);
-    check(`layout ${width}×${height}: 3D view, image, gauge and answer buttons all inside the viewport`,
-      bad.length === 0 && boxes.every((b) => !b.id.startsWith('answer') || !b.disabled),
+    check(`layout ${width}×${height}: 3D view, image, gauge, checklist and finish button all inside the viewport`,
+      bad.length === 0 && boxes.every((b) => b.id !== 'exam-finish' || !b.disabled),
       (bad.length ? bad : boxes).map(fmt).join('; '));
   }
   await page.click('#exam-stop');
