@@ -50,6 +50,8 @@ enum Command {
     Exam(cmd::exam::Args),
     /// List the real haptic-device backends: SDK found, devices, limits, or why not.
     Devices(cmd::devices::Args),
+    /// A trainee's exam record as an HTML page with plots (from the records database).
+    Report(cmd::report::Args),
 }
 
 fn main() -> std::process::ExitCode {
@@ -78,6 +80,7 @@ fn main() -> std::process::ExitCode {
         Command::Cases(c) => cmd::cases::run(c),
         Command::Devices(a) => cmd::devices::run(a),
         Command::Exam(a) => cmd::exam::run(a),
+        Command::Report(a) => cmd::report::run(a),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

@@ -12,7 +12,9 @@ use std::sync::Once;
 static FONT: &[u8] = include_bytes!("../assets/fonts/DejaVuSans.ttf");
 static REGISTER: Once = Once::new();
 
-pub(crate) fn register_font() {
+/// Registers the embedded DejaVu Sans as `sans-serif` (once; any crate
+/// drawing text with plotters calls it first).
+pub fn register_font() {
     REGISTER.call_once(|| {
         // The only failure is a malformed font, which is embedded and tested.
         let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);

@@ -11,4 +11,5 @@ pub mod image;
 pub mod image_site;
 pub mod net;
 pub mod psf;
+pub mod report;
 pub mod run;
