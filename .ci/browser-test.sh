@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Real-browser test of `echothigh view` (issue 8), called by .ci/run.
+# Real-browser tests of `echothigh view` (issue 8) and of a trainee's exam
+# session recorded in a database (`echothigh exam --trainee`, issue 14), called by .ci/run.
 # Installs Debian's chromium (apt-get) and the pinned playwright-core (npm ci in
 # web/), builds the binary, starts `echothigh view --port 0`, runs
 # tests/browser/viewer.test.mjs against the URL it prints, and saves the
@@ -65,4 +66,52 @@ echo "browser-test: server at $url"
 
 ECHOTHIGH_URL="$url" SCREENSHOT_DIR="$shots" CHROMIUM=/usr/bin/chromium ECHOTHIGH_SERVER_PID="$server" \
   node tests/browser/viewer.test.mjs
+
+# Issue 14: a trainee's two-case session (two-point) in the page, recorded in
+# a fresh SQLite database; then its rows are read back here, independently.
+exam_dir="$(mktemp -d)"
+mkdir "$exam_dir/cases"
+cp cases/normal-average.toml cases/popliteal-acute.toml "$exam_dir/cases/"
+db="$exam_dir/records.sqlite3"
+trainee="browser-test-$$"
+"$bin" exam --trainee "$trainee" --protocol two-point --cases "$exam_dir/cases" --db "sqlite://$db" \
+  --port 0 >"$out" 2>"$shots/exam-server.log" &
+server=$!
+url=""
+for _ in $(seq 1 600); do
+  url="$(sed -n 's/^echothigh viewer: \(http[^ ]*\)$/\1/p' "$out" | head -n 1)"
+  [ -n "$url" ] && break
+  if ! kill -0 "$server" 2>/dev/null; then
+    echo "browser-test: echothigh exam exited before serving; its log:" >&2
+    cat "$shots/exam-server.log" >&2
+    exit 1
+  fi
+  sleep 0.1
+done
+[ -n "$url" ] || { echo "browser-test: no URL from echothigh exam within 60 s" >&2; exit 1; }
+echo "browser-test: exam server at $url"
+ECHOTHIGH_URL="$url" ECHOTHIGH_TRAINEE="$trainee" SCREENSHOT_DIR="$shots" CHROMIUM=/usr/bin/chromium \
+  node tests/browser/exam.test.mjs
+kill -INT "$server"
+wait "$server" || true
+# The database holds what the page did: the trainee, one session with its
+# two case attempts finished and scored, two calls per case (two-point), at
+# least one press per site, and each case's ground truth.
+python3 - "$db" "$trainee" <<'PY'
+import sqlite3, sys
+db, trainee = sys.argv[1], sys.argv[2]
+c = sqlite3.connect(db)
+q = lambda sql, *a: c.execute(sql, a).fetchone()[0]
+tid = q("SELECT id FROM trainees WHERE name = ?", trainee)
+cases = q("SELECT COUNT(*) FROM case_attempts a JOIN sessions s ON a.session_id = s.id "
+          "WHERE s.trainee_id = ? AND a.finished_ms IS NOT NULL AND a.calls_total = 2", tid)
+calls = q("SELECT COUNT(*) FROM calls")
+events = q("SELECT COUNT(*) FROM events")
+truth = q("SELECT COUNT(DISTINCT case_id) FROM truth_pieces")
+ended = q("SELECT COUNT(*) FROM sessions WHERE trainee_id = ? AND ended_ms IS NOT NULL", tid)
+print(f"browser-test: database: {cases} cases finished, {calls} calls, {events} events, "
+      f"truth for {truth} cases, {ended} session(s) ended")
+ok = cases == 2 and calls == 4 and events >= 4 and truth == 2 and ended == 1
+sys.exit(0 if ok else "browser-test: the database does not hold the session the page ran")
+PY
 echo "browser-test: screenshots in $shots"

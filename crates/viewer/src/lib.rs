@@ -15,6 +15,7 @@ mod fake;
 mod frames;
 mod idle;
 pub mod protocol;
+mod records_pages;
 mod server;
 #[cfg(test)]
 mod tests;
@@ -28,7 +29,7 @@ use std::net::{IpAddr, Ipv4Addr, SocketAddr};
 use std::path::PathBuf;
 use std::sync::Arc;
 
-pub use exam::sink::{CaseLog, MemorySink, RecordSink};
+pub use exam::sink::{CaseLog, DbSink, MemorySink, RecordSink};
 pub use exam::{ExamPlan, ExamSession};
 pub use server::ServerConfig;
 

@@ -195,6 +195,8 @@ impl AppState {
 pub fn router(state: Arc<AppState>) -> Router {
     Router::new()
         .route("/ws", get(ws_upgrade))
+        .route("/records", get(instructor_page))
+        .route("/records/{name}", get(trainee_page))
         .fallback(get(serve_asset))
         .with_state(state)
 }
@@ -261,6 +263,63 @@ async fn serve_asset(uri: Uri, headers: HeaderMap, State(app): State<Arc<AppStat
         )
             .into_response(),
         None => (StatusCode::NOT_FOUND, "not found").into_response(),
+    }
+}
+
+/// `/records`: the instructor's page (every trainee), read-only.
+async fn instructor_page(headers: HeaderMap, State(app): State<Arc<AppState>>) -> Response {
+    records_page(&app, &headers, |store| {
+        let t = store.trainees()?;
+        Ok(super::records_pages::instructor(&t, store.name()))
+    })
+    .await
+}
+
+/// `/records/{name}`: one trainee's history, read-only.
+async fn trainee_page(
+    axum::extract::Path(name): axum::extract::Path<String>,
+    headers: HeaderMap,
+    State(app): State<Arc<AppState>>,
+) -> Response {
+    records_page(&app, &headers, move |store| {
+        let h = store.history(&name)?;
+        Ok(super::records_pages::trainee(&h, store.name()))
+    })
+    .await
+}
+
+/// Renders a record page from the exam session's database, off the async
+/// executor (the store's calls block); 404 when the session records
+/// nothing (practice), 500 with the database's message on an error.
+async fn records_page(
+    app: &Arc<AppState>,
+    headers: &HeaderMap,
+    render: impl FnOnce(&echothigh_records::BlockingStore) -> Result<String, echothigh_records::RecordsError>
+        + Send
+        + 'static,
+) -> Response {
+    if let Some(r) = host_refused(app, headers) {
+        return r;
+    }
+    let Some(store) = app.exam().store() else {
+        return (
+            StatusCode::NOT_FOUND,
+            "this viewer records nothing (practice); start it with `echothigh exam --trainee NAME` to keep records",
+        )
+            .into_response();
+    };
+    let html = tokio::task::spawn_blocking(move || render(&store)).await;
+    match html {
+        Ok(Ok(page)) => (
+            [
+                (header::CONTENT_TYPE, "text/html; charset=utf-8"),
+                (header::CACHE_CONTROL, "no-cache"),
+            ],
+            page,
+        )
+            .into_response(),
+        Ok(Err(e)) => (StatusCode::INTERNAL_SERVER_ERROR, format!("the records database: {e}")).into_response(),
+        Err(e) => (StatusCode::INTERNAL_SERVER_ERROR, format!("the record page failed: {e}")).into_response(),
     }
 }
 

@@ -7,6 +7,8 @@ pub mod cases;
 pub mod device_arg;
 pub mod devices;
 pub mod exam;
+#[cfg(feature = "viewer")]
+pub mod exam_live;
 pub mod image;
 pub mod image_site;
 pub mod net;

@@ -207,6 +207,11 @@ impl ExamSession {
         }
     }
 
+    /// The records database the session writes to, if any.
+    pub fn store(&self) -> Option<echothigh_records::BlockingStore> {
+        self.sink.store()
+    }
+
     /// Whether a case is open (its truth must stay hidden).
     pub fn is_open(&self) -> bool {
         self.open.is_some()

@@ -16,6 +16,11 @@ pub trait RecordSink: Send {
     fn begin_case(&mut self, case: &Case, protocol: Protocol) -> Result<CaseLog, LogError>;
     /// Where the records go, in plain words (shown on the page).
     fn describe(&self) -> String;
+    /// The records database, when the sink writes to one (the record
+    /// pages read it).
+    fn store(&self) -> Option<echothigh_records::BlockingStore> {
+        None
+    }
     /// The session is over (a case left open stays unfinished).
     fn end(&mut self) -> Result<(), LogError> {
         Ok(())
@@ -66,5 +71,70 @@ impl RecordSink for MemorySink {
 
     fn describe(&self) -> String {
         "not recorded (practice)".into()
+    }
+}
+
+/// Records into the trainee's database (`echothigh-records`): the session
+/// row opens with the first case, each case gets its attempt row with its
+/// ground truth, and every event, call and score is committed before the
+/// exam goes on.
+pub struct DbSink {
+    store: echothigh_records::BlockingStore,
+    trainee: echothigh_records::Trainee,
+    session: Option<echothigh_records::SessionId>,
+}
+
+impl DbSink {
+    /// A sink for `trainee` (created on first use) in `store`.
+    pub fn new(
+        store: echothigh_records::BlockingStore,
+        trainee: &str,
+    ) -> Result<DbSink, echothigh_records::RecordsError> {
+        let trainee = store.trainee(trainee)?;
+        Ok(DbSink {
+            store,
+            trainee,
+            session: None,
+        })
+    }
+}
+
+impl RecordSink for DbSink {
+    fn begin_case(&mut self, case: &Case, protocol: Protocol) -> Result<CaseLog, LogError> {
+        let err = |e: echothigh_records::RecordsError| LogError(e.to_string());
+        let session = match self.session {
+            Some(s) => s,
+            None => {
+                let s = self
+                    .store
+                    .begin_session(&self.trainee, protocol.name())
+                    .map_err(err)?;
+                self.session = Some(s);
+                s
+            }
+        };
+        let truth = echothigh_records::TruthSegment::of_case(case);
+        let recorder = self
+            .store
+            .begin_case(session, &case.file.name, &truth)
+            .map_err(err)?;
+        Ok(Box::new(recorder))
+    }
+
+    fn describe(&self) -> String {
+        format!("recorded in {}", self.store.name())
+    }
+
+    fn store(&self) -> Option<echothigh_records::BlockingStore> {
+        Some(self.store.clone())
+    }
+
+    fn end(&mut self) -> Result<(), LogError> {
+        if let Some(s) = self.session.take() {
+            self.store
+                .end_session(s)
+                .map_err(|e| LogError(e.to_string()))?;
+        }
+        Ok(())
     }
 }
