@@ -27,7 +27,7 @@ pub struct PwConfig {
     pub line_interval: f64,
     /// Wall filter cut-off (Hz). Default 50. Accepted 0 (off) to prf/4.
     pub wall_filter: f64,
-    /// Moving scatterers in the sample volume. Default 256. Accepted 16–4096.
+    /// Moving scatterers in the sample volume. Default 512. Accepted 16–4096.
     pub scatterers: usize,
     /// Stationary clutter relative to the blood echo (dB). Default 40.
     pub clutter_db: f64,
@@ -49,7 +49,7 @@ impl Default for PwConfig {
             fft_size: 128,
             line_interval: 5e-3,
             wall_filter: 50.0,
-            scatterers: 256,
+            scatterers: 512,
             clutter_db: 40.0,
             noise_db: -30.0,
             seed: 17,

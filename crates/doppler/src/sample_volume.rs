@@ -15,8 +15,9 @@
 //! out over the transit time, which broadens the spectrum by about
 //! `v sin θ / beam width` (Newhouse et al., IEEE TBME 1980).
 //!
-//! Scatterers are uniform over the lumen's area and over `|x| < X`, the
-//! extent where `w` exceeds e⁻⁸ (3.5 σ both ways,
+//! Scatterers are uniform over the lumen's area within the beam's
+//! elevation slab `|y| < min(R, 3.5 σ_b)` (outside it `w < e⁻⁶`) and over
+//! `|x| < X`, the extent where `w` exceeds e⁻⁶ (3.5 σ both ways,
 //! `X = 3.5 (σ_g |cos θ| + σ_b sin θ) + R`); one leaving that span
 //! re-enters at the other end with a new radius, azimuth and amplitude
 //! (a fresh cell). Amplitudes are circular complex Gaussian (Rayleigh
@@ -45,6 +46,7 @@ pub struct SampleVolume {
     cells: Vec<Cell>,
     radius: f64,
     half_span: f64,
+    y_max: f64,
     u: (f64, f64),
     n: (f64, f64),
     two_k: f64,
@@ -82,6 +84,7 @@ impl SampleVolume {
             cells: vec![Cell::default(); count],
             radius,
             half_span,
+            y_max: (3.5 * sb).min(radius),
             u: (theta.cos(), theta.sin()),
             n: (-theta.sin(), theta.cos()),
             two_k: 2.0 * std::f64::consts::TAU * f0 / c,
@@ -98,13 +101,22 @@ impl SampleVolume {
     }
 
     fn fresh(&mut self, x: f64) -> Cell {
-        let rho = self.rng.gen::<f64>().sqrt();
-        let phi = self.rng.gen_range(0.0..std::f64::consts::TAU);
+        // Uniform over the lumen's disc within the slab |y| < y_max
+        // (rejection sampling; the slab holds at least 2 y_max/(πR) of the
+        // disc's area, so the loop ends quickly).
+        let r = self.radius;
+        let (h, y) = loop {
+            let h = self.rng.gen_range(-r..r);
+            let y = self.rng.gen_range(-self.y_max..self.y_max);
+            if h * h + y * y < r * r {
+                break (h, y);
+            }
+        };
         Cell {
             x,
-            h: self.radius * rho * phi.cos(),
-            y: self.radius * rho * phi.sin(),
-            rho,
+            h,
+            y,
+            rho: (h * h + y * y).sqrt() / r,
             amp: cn(&mut self.rng),
         }
     }
