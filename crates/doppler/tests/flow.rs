@@ -66,8 +66,8 @@ fn relative_component(x: &[f64], dt: f64, f: f64) -> f64 {
 /// relative amplitude d = 0.5 at f; over 5 whole breaths (20 s) the
 /// estimated envelope keeps it within its speckle noise (one line's
 /// percentile scatters by ~10 %, averaging to ~0.5 % over 2000 lines), so
-/// > 0.3 in the normal leg. Obstructed: constant flow, the component is
-/// that noise alone, < 0.05.
+/// above 0.3 in the normal leg. Obstructed: constant flow, the component is
+/// that noise alone, below 0.05.
 #[test]
 fn cfv_phasic_when_normal_continuous_with_proximal_obstruction() {
     let fc = FlowConfig::default();
