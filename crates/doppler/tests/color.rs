@@ -3,6 +3,9 @@
 //! settings, direction by convention, aliasing when the scale is too low,
 //! flash on probe motion, determinism.
 
+// Pixel grids read clearer indexed by (row, column).
+#![allow(clippy::needless_range_loop)]
+
 use echothigh_doppler::{ColorConfig, ColorFlow, ColorMode, FlowScene, FlowVessel, Profile};
 
 const COLS: usize = 128;
