@@ -134,6 +134,20 @@ impl PwDoppler {
         &self.spectrum
     }
 
+    /// Expected total power of the electronic noise alone in a line (the
+    /// sum over the `N` bins of `E|X_k|²/N = 2σ²` with the unit-power
+    /// window; the wall filter takes off a negligible band): a line whose
+    /// power is not well above it holds no detectable flow.
+    pub fn noise_power(&self) -> f64 {
+        self.cfg.fft_size as f64 * 2.0 * self.noise_sigma * self.noise_sigma
+    }
+
+    /// Whether the last line holds flow: its power at least 4 times (6 dB)
+    /// the noise's expected power.
+    pub fn has_signal(&self) -> bool {
+        self.spectrum.total_power() > 4.0 * self.noise_power()
+    }
+
     /// The last line.
     pub fn spectrum(&self) -> &Spectrum {
         &self.spectrum
