@@ -160,12 +160,18 @@ impl ColorFlow {
                 let base = (p.wrapping_mul(2_654_435_761) + frame_off) % TABLE;
                 let a_blood = self.table[base] * blood;
                 let a_tissue = self.table[(base + 7919) % TABLE] * (clutter_gain * g as f32);
+                // Phasors advanced by one rotation per pulse (a complex
+                // multiply instead of a sine and cosine per sample).
+                let (rot_b, rot_t) = (
+                    Complex::from_polar(1.0, dphi),
+                    Complex::from_polar(1.0, tissue_dphi),
+                );
+                let (mut pb, mut pt) = (a_blood, a_tissue);
                 for (k, e) in self.ens.iter_mut().enumerate() {
-                    let kf = k as f32;
                     let n = self.table[(base + 31 + 97 * k) % TABLE] * self.noise_sigma;
-                    *e = a_blood * Complex::from_polar(1.0, dphi * kf)
-                        + a_tissue * Complex::from_polar(1.0, tissue_dphi * kf)
-                        + n;
+                    *e = pb + pt + n;
+                    pb *= rot_b;
+                    pt *= rot_t;
                 }
                 regression_filter(&mut self.ens);
                 let mut r0 = 0.0f32;
