@@ -33,6 +33,8 @@ enum Command {
     Calibrate(cmd::calibrate::Args),
     /// Render B-mode echographic frames under the probe.
     Image(cmd::image::Args),
+    /// Pulsed-wave spectral Doppler of a case's vein or artery: spectrogram PNG, WAV, velocities JSON.
+    Doppler(cmd::doppler::Args),
     /// Measure the probe's point spread function on the point phantom.
     Psf(cmd::psf::Args),
     /// Experiments: the paper's Fig. 4 and the rate, latency and damping sweeps.
@@ -70,6 +72,7 @@ fn main() -> std::process::ExitCode {
         Command::Calibrate(a) => cmd::calibrate::run(a),
         Command::Image(a) => cmd::image::run(a),
         Command::Psf(a) => cmd::psf::run(a),
+        Command::Doppler(a) => cmd::doppler::run(a),
         Command::Experiment(c) => echothigh_experiments::run(c),
         #[cfg(feature = "viewer")]
         Command::View(a) => match a.case.as_deref().map(cmd::cases::load_case).transpose() {

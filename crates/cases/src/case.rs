@@ -21,6 +21,7 @@
 //! diagnosis = "acute_dvt"
 //! ```
 
+use crate::doppler_spec::DopplerSpec;
 use crate::error::CaseError;
 use echothigh_anatomy::{Anatomy, Kind, Patient, Thrombi, ThrombusKind, ThrombusSpec, VeinTruth};
 use serde::{Deserialize, Serialize};
@@ -96,6 +97,9 @@ pub struct CaseFile {
     pub thrombus: Vec<ThrombusSpec>,
     /// The written ground truth.
     pub truth: TruthSpec,
+    /// Doppler flow settings (issue 17), optional.
+    #[serde(default, skip_serializing_if = "DopplerSpec::is_default")]
+    pub doppler: DopplerSpec,
 }
 
 /// A loaded, validated case.

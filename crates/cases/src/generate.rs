@@ -219,6 +219,7 @@ impl Generator {
                     diagnosis,
                     teaching: None,
                 },
+                doppler: Default::default(),
             },
             preset,
             pattern,

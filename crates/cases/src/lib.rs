@@ -14,11 +14,13 @@
 #![warn(missing_docs)]
 
 pub mod case;
+pub mod doppler_spec;
 pub mod error;
 pub mod generate;
 pub mod library;
 
 pub use case::{implied_diagnosis, Case, CaseFile, Diagnosis, TruthSpec, Vignette};
+pub use doppler_spec::DopplerSpec;
 pub use error::CaseError;
 pub use generate::{Draw, Generator, Pattern, PRACTICE, REALISTIC};
 

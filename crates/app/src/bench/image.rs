@@ -25,6 +25,10 @@ pub struct Args {
     /// Frames timed (after 10 warm-up frames).
     #[arg(long, default_value_t = 300)]
     pub frames: usize,
+    /// Time the Doppler paths instead (issue 17): colour frames at 256 ×
+    /// 384 with B-mode, and PW spectral lines (10 × --frames lines).
+    #[arg(long)]
+    pub doppler: bool,
 }
 
 /// Percentiles of frame times (s).
@@ -132,6 +136,25 @@ fn bench_size(
 /// Runs the benchmark.
 pub fn run(args: Args) -> Result<()> {
     anyhow::ensure!(args.frames > 0, "--frames must be > 0");
+    if args.doppler {
+        let report = super::doppler::report(args.frames)?;
+        let text = serde_json::to_string_pretty(&report)?;
+        if args.json {
+            println!("{text}");
+        } else {
+            let f = |a: &str, b: &str| report[a][b].as_f64().unwrap_or(0.0);
+            println!(
+                "colour 256x384: {:.0} fps colour only, {:.0} fps with B-mode (median thread CPU); spectral: {:.0} lines/s",
+                f("color", "color_only_fps"),
+                f("color", "bmode_plus_color_fps"),
+                f("spectral", "lines_per_s")
+            );
+        }
+        if let Some(path) = &args.out {
+            std::fs::write(path, &text).with_context(|| format!("writing {}", path.display()))?;
+        }
+        return Ok(());
+    }
     let d = ImagingConfig::default();
     // The default size, the live size, and the live size with the section
     // of the 3D leg below the profunda's branch point (four vessels, the

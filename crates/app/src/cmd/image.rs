@@ -81,6 +81,19 @@ pub struct Args {
     /// Render a test phantom instead of the thigh: points, speckle or cyst.
     #[arg(long, value_enum)]
     pub phantom: Option<PhantomKind>,
+    /// Colour flow over the B-mode frame (issue 17): `color` (velocity,
+    /// towards red, away blue) or `power`; an RGB PNG. Needs the leg
+    /// (--case or --patient with --at or --site), one frame.
+    #[arg(long, value_enum)]
+    pub doppler: Option<super::doppler_color::DopplerMode>,
+    /// Probe tilt on the leg (degrees, + aims distally). A transverse
+    /// plane sees the flow through it at 90°, hence no Doppler shift: the
+    /// beam needs a tilt. Default 0, or 20 with --doppler.
+    #[arg(long, allow_hyphen_values = true)]
+    pub tilt: Option<f64>,
+    /// Colour gain (dB) with --doppler.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub color_gain: f64,
 }
 
 /// The standard test phantoms of `--phantom`.
@@ -192,13 +205,14 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(super::cases::load_case)
         .transpose()?;
+    let mut on_leg = None;
     if case.is_some()
         || args.patient.is_some()
         || args.at.is_some()
         || args.site.is_some()
         || args.angle.is_some()
     {
-        let (patient, placement) = match &case {
+        let (patient, mut placement) = match &case {
             Some(c) => (
                 c.name().to_string(),
                 image_site::place_on(c.anatomy.clone(), args.at, args.angle, args.site.as_deref())?,
@@ -209,6 +223,14 @@ pub fn run(args: Args) -> Result<()> {
                 (patient.to_string(), at)
             }
         };
+        let tilt = args
+            .tilt
+            .unwrap_or(if args.doppler.is_some() { 20.0 } else { 0.0 });
+        anyhow::ensure!(
+            tilt.is_finite() && tilt.abs() <= 60.0,
+            "--tilt must be within ±60 degrees, got {tilt}"
+        );
+        placement.pose.tilt = tilt.to_radians();
         cfg.anatomy = match &case {
             Some(c) => image_site::case_section_anatomy(&cfg.anatomy, &placement, &c.thrombi)?,
             None => image_site::section_anatomy(&cfg.anatomy, &placement)?,
@@ -233,7 +255,12 @@ pub fn run(args: Args) -> Result<()> {
             cfg.anatomy.vein_depth * 1e3,
             cfg.anatomy.vein_diameter * 1e3
         );
+        on_leg = Some(placement);
     }
+    anyhow::ensure!(
+        args.doppler.is_none() || (on_leg.is_some() && !args.sweep && args.phantom.is_none()),
+        "--doppler needs the leg (--case, or --patient with --at or --site) and one frame (no --sweep or --phantom)"
+    );
     let face_area = cfg.probe_area();
     anyhow::ensure!(
         args.lateral.is_finite(),
@@ -252,7 +279,44 @@ pub fn run(args: Args) -> Result<()> {
         let press = presses(&scenario, &[args.force], bone)?.remove(0);
         let mut r = Renderer::new(&cfg, args.vein)?;
         let (frame, vein, artery) = render_at(&mut r, &press, face_area, args.time, args.lateral)?;
-        write(&args.out, &cfg, &frame)?;
+        match (args.doppler, &on_leg) {
+            (Some(mode), Some(placement)) => {
+                let thrombi = match &case {
+                    Some(c) => c.thrombi.clone(),
+                    None => echothigh_anatomy::Thrombi::new(&placement.anatomy, &[])?,
+                };
+                let section = placement.anatomy.section(&placement.pose)?;
+                let inputs = super::doppler_color::ColorInputs {
+                    anatomy: &placement.anatomy,
+                    section: &section,
+                    thrombi: &thrombi,
+                    proximal_obstruction: case
+                        .as_ref()
+                        .is_some_and(|c| c.file.doppler.proximal_obstruction),
+                    imaging_anatomy: &cfg.anatomy,
+                };
+                let input = FrameInput {
+                    deformation: &press.deformation,
+                    probe_pressure: press.force / face_area,
+                    time: args.time,
+                    lateral_offset: args.lateral,
+                };
+                let n = super::doppler_color::write_color(
+                    &args.out,
+                    mode,
+                    args.color_gain,
+                    &inputs,
+                    &r,
+                    &input,
+                    &frame,
+                )?;
+                println!(
+                    "{}: {mode:?} Doppler, {n} coloured pixels",
+                    args.out.display()
+                );
+            }
+            _ => write(&args.out, &cfg, &frame)?,
+        }
         println!(
             "{}: {} vein at {:.1} N (indentation {:.1} mm): vein lumen {:.0} % of rest, artery {:.0} %",
             args.out.display(),

@@ -9,6 +9,8 @@ pub mod devices;
 pub mod exam;
 #[cfg(feature = "viewer")]
 pub mod exam_live;
+pub mod doppler;
+pub mod doppler_color;
 pub mod image;
 pub mod image_site;
 pub mod net;
