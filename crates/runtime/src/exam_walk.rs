@@ -298,7 +298,7 @@ impl<'a> Walker<'a> {
         let force = Vec3::from(rec.force).norm();
         let position = self.run.device().position();
         let depth = (position - here.skin).dot(&here.inward);
-        if here.look.is_none() || self.ticks % self.look_every == 0 {
+        if here.look.is_none() || self.ticks.is_multiple_of(self.look_every) {
             let model = self.run.physics().model();
             here.look = Some(
                 here.probe
