@@ -8,7 +8,7 @@ use super::protocol::sample_state;
 /// `msg.type` in `app.js`'s `onJson`, the rest as `s.<key>` in `onState`,
 /// `syncControls` (app.js), `showStatus` (panels.js) and `updateState`
 /// (scene.js).
-const PAGE_STATE_KEYS: [&str; 25] = [
+const PAGE_STATE_KEYS: [&str; 26] = [
     "v",
     "type",
     "time",
@@ -29,6 +29,7 @@ const PAGE_STATE_KEYS: [&str; 25] = [
     "exam_playing",
     "level_s",
     "level",
+    "section",
     "vein",
     "exam",
     "observer",
@@ -68,7 +69,8 @@ fn state_json_is_unchanged_byte_for_byte() {
     // The exact text the page received before `ViewState` flattened
     // `LiveStatus`: same keys, same nesting, same order (plus `observer`,
     // `seq` and `fault`, added last for issues 19 and 16; `level_s` and
-    // `level`, the probe's place along the leg, for issue 12).
+    // `level`, the probe's place along the leg, for issue 12; `section`, the
+    // imaging thread's reading under the probe, for issue 13).
     let expected = concat!(
         r#"{"v":1,"type":"state","time":1.25,"probe_position":[0.0,0.07,0.01],"#,
         r#""probe_orientation":[1.0,0.0,0.0,0.0],"device":[0.0,0.0,0.0],"#,
@@ -76,7 +78,7 @@ fn state_json_is_unchanged_byte_for_byte() {
         r#""physics_force":[0.0,4.0,0.1],"max_force":30.0,"physics_rate":98.0,"#,
         r#""haptic_rate":1000.0,"missed_deadlines":3,"model_age":0.012,"mode":"hold","#,
         r#""physics_rate_setting":100.0,"latency_setting":0.02,"exam_playing":true,"#,
-        r#""level_s":0.2,"level":"femoral_canal","#,
+        r#""level_s":0.2,"level":"femoral_canal","section":null,"#,
         r#""vein":"acute","exam":{"open":false,"question":2,"peak_force":0.0,"#,
         r#""answered":2,"correct":1,"last":{"question":2,"answered_compressible":true,"#,
         r#""truth":"chronic","correct":false,"peak_force":12.5}},"observer":false,"seq":0,"fault":null}"#
