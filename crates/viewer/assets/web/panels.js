@@ -128,6 +128,12 @@ export function showStatus(s, fps) {
   set('st-fps', `${fps.toFixed(0)} frames/s`);
   set('st-vein', s.vein ?? 'hidden (exam)');
   set('st-level', s.level ? `${LEVEL_NAMES[s.level] ?? s.level}, ${(s.level_s * 100).toFixed(1)} cm below the groin` : '–');
+  // The imaging thread's reading of the section under the probe (issue 13);
+  // hidden while an exam question is open (the trainee reads the image).
+  const r = s.section;
+  set('st-section', r && !(s.exam && s.exam.open)
+    ? `${r.vein ?? 'vein'} ${(r.vein_lumen_ratio * 100).toFixed(0)} % of rest${r.walls_met ? ' (walls met)' : ''}, artery ${(r.artery_lumen_ratio * 100).toFixed(0)} %`
+    : '–');
   const fault = document.getElementById('fault');
   fault.hidden = !s.fault;
   fault.textContent = s.fault ? `Simulation stopped: ${s.fault}. Press Reset to restart it.` : '';
