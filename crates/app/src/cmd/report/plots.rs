@@ -172,6 +172,9 @@ pub fn force_traces(events: &[CompressionEvent]) -> Result<String> {
     Ok(svg)
 }
 
+/// One of a session's rates.
+type Rate = fn(&SessionRecord) -> Option<f64>;
+
 /// Sensitivity, specificity, coverage and calls correct (%) per session,
 /// sessions numbered from 1 (a session without the value has no point).
 pub fn trend(sessions: &[SessionRecord]) -> Result<String> {
@@ -195,7 +198,7 @@ pub fn trend(sessions: &[SessionRecord]) -> Result<String> {
             .x_label_formatter(&|x| format!("{x:.0}"))
             .draw()
             .map_err(err)?;
-        let series: [(&str, RGBColor, fn(&SessionRecord) -> Option<f64>); 4] = [
+        let series: [(&str, RGBColor, Rate); 4] = [
             ("sensitivity", RGBColor(198, 40, 40), |s| {
                 s.rates.sensitivity
             }),
