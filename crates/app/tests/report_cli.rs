@@ -14,7 +14,9 @@
 //! Session 1: 1/2, 1/2, 75.0 %, 2/4, 2/4 → 50.0 % each but coverage.
 //! Session 2: 100.0 % everywhere but coverage 90.0 % and pressure 3/4 = 75.0 %.
 
-use echothigh_exam::{BinState, Call, CaseScore, CompressionEvent, CoverageBin, ExamLog, Finding, SiteScore};
+use echothigh_exam::{
+    BinState, Call, CaseScore, CompressionEvent, CoverageBin, ExamLog, Finding, SiteScore,
+};
 use echothigh_records::{BlockingStore, SessionId, TruthSegment};
 use std::process::Command;
 use Finding::*;
@@ -31,28 +33,63 @@ fn press(k: usize, adequate: bool) -> CompressionEvent {
         artery_deformed: adequate,
         coapted: adequate,
         slide: 0.0,
-        force_trace: (0..=50).map(|i| [t + i as f64 * 0.02, (10.0 + k as f64) * (i as f64 / 50.0)]).collect(),
+        force_trace: (0..=50)
+            .map(|i| [t + i as f64 * 0.02, (10.0 + k as f64) * (i as f64 / 50.0)])
+            .collect(),
     }
 }
 
-fn case(store: &BlockingStore, s: SessionId, name: &str, sites: &[(&str, Finding, Finding)], cov: f64, presses: &[bool]) {
+fn case(
+    store: &BlockingStore,
+    s: SessionId,
+    name: &str,
+    sites: &[(&str, Finding, Finding)],
+    cov: f64,
+    presses: &[bool],
+) {
     let truth = vec![
-        TruthSegment { vein: "cfv".into(), s_start: 0.0, s_end: 0.03, kind: "acute_occlusive".into() },
-        TruthSegment { vein: "cfv".into(), s_start: 0.03, s_end: 0.06, kind: "normal".into() },
+        TruthSegment {
+            vein: "cfv".into(),
+            s_start: 0.0,
+            s_end: 0.03,
+            kind: "acute_occlusive".into(),
+        },
+        TruthSegment {
+            vein: "cfv".into(),
+            s_start: 0.03,
+            s_end: 0.06,
+            kind: "normal".into(),
+        },
     ];
     let mut rec = store.begin_case(s, name, &truth).unwrap();
     for (k, &a) in presses.iter().enumerate() {
         rec.event(&press(k, a)).unwrap();
     }
     for (i, &(site, truth, call)) in sites.iter().enumerate() {
-        rec.call(&Call { site: site.into(), vein: "cfv".into(), s: 0.01, finding: call, truth, t: 5.0 + i as f64 })
-            .unwrap();
+        rec.call(&Call {
+            site: site.into(),
+            vein: "cfv".into(),
+            s: 0.01,
+            finding: call,
+            truth,
+            t: 5.0 + i as f64,
+        })
+        .unwrap();
     }
-    let bins = [BinState::Closed, BinState::NotClosed, BinState::InadequatePressure]
-        .iter()
-        .enumerate()
-        .map(|(i, &state)| CoverageBin { vein: "cfv".into(), s_start: 0.02 * i as f64, s_end: 0.02 * (i + 1) as f64, state })
-        .collect::<Vec<_>>();
+    let bins = [
+        BinState::Closed,
+        BinState::NotClosed,
+        BinState::InadequatePressure,
+    ]
+    .iter()
+    .enumerate()
+    .map(|(i, &state)| CoverageBin {
+        vein: "cfv".into(),
+        s_start: 0.02 * i as f64,
+        s_end: 0.02 * (i + 1) as f64,
+        state,
+    })
+    .collect::<Vec<_>>();
     let correct = sites.iter().filter(|(_, t, c)| t == c).count() as u32;
     let score = CaseScore {
         case: name.into(),
@@ -87,10 +124,28 @@ fn the_report_carries_the_hand_computed_numbers_plots_and_calls() {
         let store = BlockingStore::open(Some(&url)).unwrap();
         let jo = store.trainee("Jo").unwrap();
         let s1 = store.begin_session(&jo, "two-point").unwrap();
-        case(&store, s1, "A", &[("cfv", AcuteDvt, AcuteDvt), ("popliteal", Normal, Normal)], 1.0, &[true, true]);
-        case(&store, s1, "B", &[("cfv", Normal, AcuteDvt), ("popliteal", AcuteDvt, Normal)], 0.5, &[false, false]);
+        case(
+            &store,
+            s1,
+            "A",
+            &[("cfv", AcuteDvt, AcuteDvt), ("popliteal", Normal, Normal)],
+            1.0,
+            &[true, true],
+        );
+        case(
+            &store,
+            s1,
+            "B",
+            &[("cfv", Normal, AcuteDvt), ("popliteal", AcuteDvt, Normal)],
+            0.5,
+            &[false, false],
+        );
         let s2 = store.begin_session(&jo, "three-point").unwrap();
-        let c = [("cfv", AcuteDvt, AcuteDvt), ("popliteal", Normal, Normal), ("fv-mid", Normal, Normal)];
+        let c = [
+            ("cfv", AcuteDvt, AcuteDvt),
+            ("popliteal", Normal, Normal),
+            ("fv-mid", Normal, Normal),
+        ];
         case(&store, s2, "C", &c, 0.9, &[true, true, true, false]);
     }
     let out = dir.path().join("report");
@@ -99,7 +154,11 @@ fn the_report_carries_the_hand_computed_numbers_plots_and_calls() {
         .arg(&out)
         .output()
         .unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let html = std::fs::read_to_string(out.join("index.html")).unwrap();
     assert!(html.contains(
         "<tr><td>3</td><td>80.0 %</td><td>71.4 %</td><td>62.5 %</td><td>66.7 %</td><td>75.0 %</td><td>0</td></tr>"
@@ -118,8 +177,12 @@ fn the_report_carries_the_hand_computed_numbers_plots_and_calls() {
     // in their colours (#2E7D32, #282828).
     let upper = html.to_uppercase();
     assert!(upper.contains("#2E7D32") && upper.contains("#282828"));
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    assert_eq!(json["history"]["rates"]["sensitivity"].as_f64(), Some(2.0 / 3.0));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(
+        json["history"]["rates"]["sensitivity"].as_f64(),
+        Some(2.0 / 3.0)
+    );
     assert_eq!(json["history"]["rates"]["specificity"].as_f64(), Some(0.75));
     assert_eq!(json["cases"].as_array().unwrap().len(), 3);
 
@@ -130,6 +193,9 @@ fn the_report_carries_the_hand_computed_numbers_plots_and_calls() {
         .unwrap();
     assert!(!run.status.success());
     let err = String::from_utf8_lossy(&run.stderr);
-    assert!(err.contains("no trainee named `Nobody`") && err.contains("records.sqlite3"), "{err}");
+    assert!(
+        err.contains("no trainee named `Nobody`") && err.contains("records.sqlite3"),
+        "{err}"
+    );
     assert!(!dir.path().join("nobody").exists());
 }

@@ -46,8 +46,14 @@ pub fn page(r: &Report) -> Result<String> {
     let h = &r.history;
     let mut o = String::new();
     let name = esc(&h.name);
-    writeln!(o, "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">")?;
-    writeln!(o, "<title>echothigh report: {name}</title><style>{STYLE}</style></head><body>")?;
+    writeln!(
+        o,
+        "<!DOCTYPE html><html lang=\"en\"><head><meta charset=\"utf-8\">"
+    )?;
+    writeln!(
+        o,
+        "<title>echothigh report: {name}</title><style>{STYLE}</style></head><body>"
+    )?;
     writeln!(o, "<h1>Compression exam record: {name}</h1>")?;
     writeln!(
         o,
@@ -56,7 +62,12 @@ pub fn page(r: &Report) -> Result<String> {
          of the specificity and counted as unresolved.</p>"
     )?;
     writeln!(o, "<h2>All sessions</h2><table id=\"overall\"><tr>{RATE_HEAD}<th>unresolved negatives</th></tr>")?;
-    writeln!(o, "<tr>{}<td>{}</td></tr></table>", rates_cells(&h.rates), h.rates.confusion.unresolved_negative)?;
+    writeln!(
+        o,
+        "<tr>{}<td>{}</td></tr></table>",
+        rates_cells(&h.rates),
+        h.rates.confusion.unresolved_negative
+    )?;
 
     writeln!(o, "<h2>Sessions</h2><table id=\"sessions\"><tr><th>session</th><th>protocol</th><th>host</th>{RATE_HEAD}</tr>")?;
     for (i, s) in h.sessions.iter().enumerate() {
@@ -70,7 +81,11 @@ pub fn page(r: &Report) -> Result<String> {
         )?;
     }
     writeln!(o, "</table>")?;
-    writeln!(o, "<h3>Trend over sessions</h3>{}", plots::trend(&h.sessions)?)?;
+    writeln!(
+        o,
+        "<h3>Trend over sessions</h3>{}",
+        plots::trend(&h.sessions)?
+    )?;
 
     writeln!(o, "<h2>By site</h2><table id=\"sites\"><tr><th>site</th><th>TP</th><th>FN</th><th>TN</th><th>FP</th><th>unresolved</th><th>sensitivity</th><th>specificity</th></tr>")?;
     for s in &h.sites {
@@ -91,11 +106,26 @@ pub fn page(r: &Report) -> Result<String> {
     writeln!(o, "</table>")?;
 
     write!(o, "<h2>Cases</h2><p class=\"key\">Coverage:")?;
-    for st in [BinState::Closed, BinState::NotClosed, BinState::InadequatePressure, BinState::NotExamined] {
+    for st in [
+        BinState::Closed,
+        BinState::NotClosed,
+        BinState::InadequatePressure,
+        BinState::NotExamined,
+    ] {
         let c = plots::state_colour(st);
-        write!(o, "<span style=\"background:rgb({},{},{})\"></span>{}", c.0, c.1, c.2, st.name().replace('_', " "))?;
+        write!(
+            o,
+            "<span style=\"background:rgb({},{},{})\"></span>{}",
+            c.0,
+            c.1,
+            c.2,
+            st.name().replace('_', " ")
+        )?;
     }
-    let (a, c) = (plots::truth_colour("acute_occlusive"), plots::truth_colour("chronic"));
+    let (a, c) = (
+        plots::truth_colour("acute_occlusive"),
+        plots::truth_colour("chronic"),
+    );
     writeln!(
         o,
         "<br>Truth (thin bar above):<span style=\"background:rgb({},{},{})\"></span>acute thrombus\
@@ -120,11 +150,24 @@ pub fn page(r: &Report) -> Result<String> {
             )?,
             None => writeln!(o, "<p>Not finished (interrupted): no score.</p>")?,
         }
-        writeln!(o, "<h4>Coverage and truth</h4>{}", plots::coverage_strip(&d.coverage, &d.truth)?)?;
-        writeln!(o, "<h4>Force per compression ({} presses)</h4>{}", d.events.len(), plots::force_traces(&d.events)?)?;
+        writeln!(
+            o,
+            "<h4>Coverage and truth</h4>{}",
+            plots::coverage_strip(&d.coverage, &d.truth)?
+        )?;
+        writeln!(
+            o,
+            "<h4>Force per compression ({} presses)</h4>{}",
+            d.events.len(),
+            plots::force_traces(&d.events)?
+        )?;
         writeln!(o, "<h4>Calls</h4><table class=\"calls\"><tr><th>site</th><th>vein</th><th>s (cm)</th><th>call</th><th>truth</th><th>t (s)</th></tr>")?;
         for c in &d.calls {
-            let class = if c.is_correct() { "" } else { " class=\"wrong\"" };
+            let class = if c.is_correct() {
+                ""
+            } else {
+                " class=\"wrong\""
+            };
             writeln!(
                 o,
                 "<tr{class}><td>{}</td><td>{}</td><td>{:.1}</td><td>{}</td><td>{}</td><td>{:.1}</td></tr>",

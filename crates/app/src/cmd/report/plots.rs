@@ -36,7 +36,11 @@ fn err<E: std::fmt::Display>(e: E) -> anyhow::Error {
 pub fn coverage_strip(bins: &[CoverageBin], truth: &[TruthSegment]) -> Result<String> {
     echothigh_experiments::plot::register_font();
     let mut veins: Vec<&str> = Vec::new();
-    for v in bins.iter().map(|b| b.vein.as_str()).chain(truth.iter().map(|t| t.vein.as_str())) {
+    for v in bins
+        .iter()
+        .map(|b| b.vein.as_str())
+        .chain(truth.iter().map(|t| t.vein.as_str()))
+    {
         if !veins.contains(&v) {
             veins.push(v);
         }
@@ -63,7 +67,13 @@ pub fn coverage_strip(bins: &[CoverageBin], truth: &[TruthSegment]) -> Result<St
             .disable_y_mesh()
             .disable_y_axis()
             .x_desc("s below the inguinal ligament (cm)")
-            .x_label_formatter(&|x| if *x < 0.0 { String::new() } else { format!("{x:.0}") })
+            .x_label_formatter(&|x| {
+                if *x < 0.0 {
+                    String::new()
+                } else {
+                    format!("{x:.0}")
+                }
+            })
             .draw()
             .map_err(err)?;
         for (i, vein) in veins.iter().enumerate() {
@@ -84,12 +94,17 @@ pub fn coverage_strip(bins: &[CoverageBin], truth: &[TruthSegment]) -> Result<St
                 }))
                 .map_err(err)?;
             chart
-                .draw_series(truth.iter().filter(|t| t.vein == *vein && t.kind != "normal").map(|t| {
-                    Rectangle::new(
-                        [(t.s_start * 100.0, y + 0.1), (t.s_end * 100.0, y + 0.28)],
-                        truth_colour(&t.kind).filled(),
-                    )
-                }))
+                .draw_series(
+                    truth
+                        .iter()
+                        .filter(|t| t.vein == *vein && t.kind != "normal")
+                        .map(|t| {
+                            Rectangle::new(
+                                [(t.s_start * 100.0, y + 0.1), (t.s_end * 100.0, y + 0.28)],
+                                truth_colour(&t.kind).filled(),
+                            )
+                        }),
+                )
                 .map_err(err)?;
         }
         root.present().map_err(err)?;
@@ -140,7 +155,9 @@ pub fn force_traces(events: &[CompressionEvent]) -> Result<String> {
                 ))
                 .map_err(err)?
                 .label(label)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
+                });
         }
         if !events.is_empty() {
             chart
@@ -154,6 +171,9 @@ pub fn force_traces(events: &[CompressionEvent]) -> Result<String> {
     }
     Ok(svg)
 }
+
+/// One of a session's rates.
+type Rate = fn(&SessionRecord) -> Option<f64>;
 
 /// Sensitivity, specificity, coverage and calls correct (%) per session,
 /// sessions numbered from 1 (a session without the value has no point).
@@ -178,11 +198,17 @@ pub fn trend(sessions: &[SessionRecord]) -> Result<String> {
             .x_label_formatter(&|x| format!("{x:.0}"))
             .draw()
             .map_err(err)?;
-        let series: [(&str, RGBColor, fn(&SessionRecord) -> Option<f64>); 4] = [
-            ("sensitivity", RGBColor(198, 40, 40), |s| s.rates.sensitivity),
-            ("specificity", RGBColor(21, 101, 192), |s| s.rates.specificity),
+        let series: [(&str, RGBColor, Rate); 4] = [
+            ("sensitivity", RGBColor(198, 40, 40), |s| {
+                s.rates.sensitivity
+            }),
+            ("specificity", RGBColor(21, 101, 192), |s| {
+                s.rates.specificity
+            }),
             ("coverage", RGBColor(46, 125, 50), |s| s.rates.mean_coverage),
-            ("calls correct", RGBColor(120, 120, 120), |s| s.rates.calls_correct),
+            ("calls correct", RGBColor(120, 120, 120), |s| {
+                s.rates.calls_correct
+            }),
         ];
         for (name, colour, value) in series {
             let pts: Vec<(f64, f64)> = sessions
@@ -194,7 +220,9 @@ pub fn trend(sessions: &[SessionRecord]) -> Result<String> {
                 .draw_series(LineSeries::new(pts.clone(), colour.stroke_width(2)))
                 .map_err(err)?
                 .label(name)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2))
+                });
             chart
                 .draw_series(pts.into_iter().map(|p| Circle::new(p, 4, colour.filled())))
                 .map_err(err)?;
