@@ -311,7 +311,7 @@ try {
   await until(page, () => Math.hypot(...window.echothigh.state.rendered_force) > 3.0, null, 'a press during the exam');
   await page.mouse.up();
   await page.click('#lift');
-  const pressed = await until(page, () => {
+  const examPressed = await until(page, () => {
     const e = window.echothigh.state.exam;
     return e.presses >= 1 ? e : null;
   }, null, 'the press detected once released');
@@ -327,7 +327,7 @@ try {
   check('one exam case pressed, called, finished and revealed',
     finished.cases_done === opened.cases_done + 1 && sc.calls_total === 3 && sc.sites[0].call === 'normal' &&
       shown.includes(finished.last.title) && shown.includes(`Calls ${sc.calls_correct} / 3`),
-    `${pressed.presses} press(es), peak ${pressed.peak_force.toFixed(1)} N · ${shown}`);
+    `${examPressed.presses} press(es), peak ${examPressed.peak_force.toFixed(1)} N · ${shown}`);
   await page.screenshot({ path: join(shots, '03-exam.png') });
 
   // Layout (issue 19, "fits a laptop"): at 1280×800 and 1024×768, with an

@@ -112,6 +112,7 @@ fn case(
                 called_without_adequate_pressure: false,
             })
             .collect(),
+        missed: Vec::new(),
     };
     rec.finish(&bins, &score).unwrap();
 }

@@ -500,6 +500,21 @@ impl Store {
                 called_without_adequate_pressure: self.get::<i64>(&r, 5)? != 0,
             });
         }
+        let missed = match &numbers {
+            Some(_) => {
+                let sql = "SELECT missed FROM case_attempts WHERE id = $1";
+                let text: Option<String> = match self.rows(sql.into(), Some(id)).await?.first() {
+                    Some(r) => self.get(r, 0)?,
+                    None => None,
+                };
+                match text {
+                    Some(t) => serde_json::from_str(&t)
+                        .map_err(|e| self.bad_row("case_attempts", id, format!("missed: {e}")))?,
+                    None => Vec::new(),
+                }
+            }
+            None => Vec::new(),
+        };
         let score = numbers.map(|n| CaseScore {
             case: case.clone(),
             protocol: n.protocol,
@@ -512,6 +527,7 @@ impl Store {
             peak_force: n.peak_force,
             mean_force: n.mean_force,
             sites,
+            missed,
         });
         Ok(CaseDetail {
             id,

@@ -423,7 +423,7 @@ impl Store {
         sqlx::query(
             "UPDATE case_attempts SET finished_ms = $1, protocol = $2, coverage = $3, calls_correct = $4, \
              calls_total = $5, pressure_adequate = $6, excessive_force_on_tail = $7, duration = $8, \
-             peak_force = $9, mean_force = $10 WHERE id = $11",
+             peak_force = $9, mean_force = $10, missed = $11 WHERE id = $12",
         )
         .bind(now_ms())
         .bind(&score.protocol)
@@ -435,6 +435,12 @@ impl Store {
         .bind(score.duration)
         .bind(score.peak_force)
         .bind(score.mean_force)
+        .bind(serde_json::to_string(&score.missed).map_err(|err| RecordsError::BadRow {
+            db: self.db.to_string(),
+            table: "case_attempts",
+            id: case.0,
+            why: format!("missed segments not representable as JSON: {err}"),
+        })?)
         .bind(case.0)
         .execute(&mut *tx)
         .await

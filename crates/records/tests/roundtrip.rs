@@ -64,6 +64,12 @@ fn score(case: &str) -> CaseScore {
                 called_without_adequate_pressure: false,
             },
         ],
+        missed: vec![echothigh_exam::MissedSegment {
+            vein: "fv".into(),
+            s_start: 0.17,
+            s_end: 0.2300000000000001,
+            truth: Finding::AcuteDvt,
+        }],
     }
 }
 

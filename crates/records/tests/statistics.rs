@@ -86,6 +86,7 @@ fn case(
                 called_without_adequate_pressure: false,
             })
             .collect(),
+        missed: Vec::new(),
     };
     rec.finish(&[], &score).unwrap();
 }

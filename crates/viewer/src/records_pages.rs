@@ -4,7 +4,8 @@
 //! per site). Rendered on the server from `echothigh-records`; they change
 //! nothing.
 
-use echothigh_records::{Rates, TraineeHistory, TraineeSummary};
+use echothigh_records::stats::Rates;
+use echothigh_records::{TraineeHistory, TraineeSummary};
 use std::fmt::Write;
 
 /// `text` with the HTML specials escaped.
@@ -44,7 +45,11 @@ fn when(ms: Option<i64>) -> String {
     let d = doy - (153 * mp + 2) / 5 + 1;
     let m = if mp < 10 { mp + 3 } else { mp - 9 };
     let y = yoe + era * 400 + i64::from(m <= 2);
-    format!("{y:04}-{m:02}-{d:02} {:02}:{:02}", rem / 3600, rem % 3600 / 60)
+    format!(
+        "{y:04}-{m:02}-{d:02} {:02}:{:02}",
+        rem / 3600,
+        rem % 3600 / 60
+    )
 }
 
 const HEAD: &str = r#"<!doctype html><html lang="en"><head><meta charset="utf-8">
@@ -195,7 +200,10 @@ mod tests {
         assert_eq!(when(Some(0)), "1970-01-01 00:00");
         // 2000-02-29 12:00 UTC, a leap day of a century year divisible by 400.
         assert_eq!(when(Some(951_825_600_000)), "2000-02-29 12:00");
-        assert_eq!(escape("<b>\"Ada\" & 'Bo'</b>"), "&lt;b&gt;&quot;Ada&quot; &amp; &#39;Bo&#39;&lt;/b&gt;");
+        assert_eq!(
+            escape("<b>\"Ada\" & 'Bo'</b>"),
+            "&lt;b&gt;&quot;Ada&quot; &amp; &#39;Bo&#39;&lt;/b&gt;"
+        );
         assert_eq!(percent_encode("Ada Lovelace/é"), "Ada%20Lovelace%2F%C3%A9");
     }
 }

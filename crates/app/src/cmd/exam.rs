@@ -127,7 +127,10 @@ pub fn run(args: Args) -> Result<()> {
 struct Tee<'a>(&'a mut MemoryLog, &'a mut dyn ExamLog);
 
 impl ExamLog for Tee<'_> {
-    fn event(&mut self, e: &echothigh_exam::CompressionEvent) -> Result<(), echothigh_exam::LogError> {
+    fn event(
+        &mut self,
+        e: &echothigh_exam::CompressionEvent,
+    ) -> Result<(), echothigh_exam::LogError> {
         self.1.event(e)?;
         self.0.event(e)
     }
@@ -160,7 +163,11 @@ pub fn recorder(
     let store = echothigh_records::BlockingStore::open(args.db.as_deref())?;
     let trainee = store.trainee(trainee_name(args))?;
     let session = store.begin_session(&trainee, protocol.name())?;
-    Ok(store.begin_case(session, case.name(), &echothigh_records::TruthSegment::of_case(case))?)
+    Ok(store.begin_case(
+        session,
+        case.name(),
+        &echothigh_records::TruthSegment::of_case(case),
+    )?)
 }
 
 /// Loads `--script` and `--case`.
@@ -183,8 +190,12 @@ fn run_loaded(
     case: &echothigh_cases::Case,
     log: &mut dyn ExamLog,
 ) -> Result<ExamOutcome> {
-    let origin = args.script.as_ref().map_or(String::new(), |p| p.display().to_string());
-    run_exam(script, case, log).with_context(|| format!("exam script {origin} on case {}", case.name()))
+    let origin = args
+        .script
+        .as_ref()
+        .map_or(String::new(), |p| p.display().to_string());
+    run_exam(script, case, log)
+        .with_context(|| format!("exam script {origin} on case {}", case.name()))
 }
 
 fn print_json(log: &MemoryLog, out: &ExamOutcome) -> Result<()> {

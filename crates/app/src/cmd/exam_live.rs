@@ -24,7 +24,9 @@ fn cases(args: &Args) -> Result<Vec<Case>> {
             .map(|_| {
                 let d = g.draw();
                 let name = d.file.name.clone();
-                d.file.load().with_context(|| format!("generated case {name}"))
+                d.file
+                    .load()
+                    .with_context(|| format!("generated case {name}"))
             })
             .collect();
     }
@@ -45,8 +47,10 @@ fn cases_in(dir: &Path) -> Result<Vec<Case>> {
     paths
         .iter()
         .map(|p| {
-            let text = std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
-            echothigh_cases::from_toml_str(&text).with_context(|| format!("case file {}", p.display()))
+            let text =
+                std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+            echothigh_cases::from_toml_str(&text)
+                .with_context(|| format!("case file {}", p.display()))
         })
         .collect()
 }

@@ -6,11 +6,11 @@ pub mod calibrate_device;
 pub mod cases;
 pub mod device_arg;
 pub mod devices;
+pub mod doppler;
+pub mod doppler_color;
 pub mod exam;
 #[cfg(feature = "viewer")]
 pub mod exam_live;
-pub mod doppler;
-pub mod doppler_color;
 pub mod image;
 pub mod image_site;
 pub mod net;

@@ -33,7 +33,9 @@ CREATE TABLE case_attempts (
     excessive_force_on_tail BIGINT,
     duration DOUBLE PRECISION,
     peak_force DOUBLE PRECISION,
-    mean_force DOUBLE PRECISION
+    mean_force DOUBLE PRECISION,
+    -- CaseScore::missed as JSON: the diseased stretches never examined.
+    missed TEXT
 );
 
 CREATE TABLE truth_pieces (

@@ -33,7 +33,9 @@ CREATE TABLE case_attempts (
     excessive_force_on_tail INTEGER,
     duration REAL,
     peak_force REAL,
-    mean_force REAL
+    mean_force REAL,
+    -- CaseScore::missed as JSON: the diseased stretches never examined.
+    missed TEXT
 );
 
 CREATE TABLE truth_pieces (

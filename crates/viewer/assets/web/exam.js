@@ -27,6 +27,8 @@ export function showExam(e, levelS, send) {
   $('exam-start').disabled = e.open;
   $('exam-finish').disabled = !e.open;
   $('exam-stop').disabled = !e.active;
+  // The instructions make room for the checklist while a case is open.
+  $('exam-help').hidden = e.open;
   const who = e.trainee ? `${e.trainee} · ` : '';
   $('exam-meta').textContent = e.active || e.cases_done ?
     `${who}${e.protocol} · case ${e.case_number} of ${e.cases_total} · ${e.recording}` : '';
