@@ -366,6 +366,11 @@ try {
   }
   await page.click('#exam-stop');
   await until(page, () => !window.echothigh.state.exam.open, null, 'the exam left after the layout check');
+  // Leaving the exam puts the practice leg back (the one `start` was found
+  // on, and the one the lag measurement's 8–16 mm presses were chosen for:
+  // a drawn case's leg may be obese, whose fat barely changes the force
+  // between those depths), with its vein control.
+  await until(page, () => window.echothigh.state.vein !== null, null, 'the practice leg and its vein control back');
   await page.setViewportSize({ width: 1440, height: 900 });
 
   // Keyboard only (issue 19): focus the 3D view (no mouse), place the probe

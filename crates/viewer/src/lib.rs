@@ -120,6 +120,7 @@ pub fn run_with(
         state_rate: args.rate,
         allow_remote: args.allow_remote,
         idle_timeout,
+        home_case: case,
     };
     let addr = SocketAddr::new(args.bind, args.port);
     let served = tokio::runtime::Builder::new_current_thread()
@@ -168,10 +169,11 @@ pub async fn serve_on(
     session: ExamSession,
     shutdown: impl std::future::Future<Output = ()> + Send + 'static,
 ) -> Result<()> {
+    let idle_timeout = config.idle_timeout;
     let state = Arc::new(server::AppState::new(control, session, config));
     let observer =
         exam::ExamObserver::spawn(state.clone()).context("starting the exam observer")?;
-    let listener = idle::IdleListener::new(listener, config.idle_timeout);
+    let listener = idle::IdleListener::new(listener, idle_timeout);
     let served = axum::serve(listener, server::router(state.clone()))
         .with_graceful_shutdown(shutdown)
         .await

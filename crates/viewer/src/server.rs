@@ -27,7 +27,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
 /// Server settings.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct ServerConfig {
     /// Rate at which each connection receives the state (Hz, 1..=120).
     pub state_rate: f64,
@@ -37,6 +37,9 @@ pub struct ServerConfig {
     /// A connection (HTTP or WebSocket) from which nothing was read for this
     /// long is closed ([`super::idle`]); pages are pinged every third of it.
     pub idle_timeout: Duration,
+    /// The case whose leg the server started with (`view --case`; `None`:
+    /// the scenario's own leg). Leaving the exam puts it back.
+    pub home_case: Option<echothigh_cases::Case>,
 }
 
 impl Default for ServerConfig {
@@ -45,6 +48,7 @@ impl Default for ServerConfig {
             state_rate: 40.0,
             allow_remote: false,
             idle_timeout: super::idle::DEFAULT_IDLE_TIMEOUT,
+            home_case: None,
         }
     }
 }
@@ -60,6 +64,9 @@ pub struct AppState {
     /// Grows when the live mesh changes (a case's leg loaded): each
     /// connection then sends a new `hello` with the mesh.
     mesh_epoch: std::sync::atomic::AtomicU64,
+    /// Whether the live leg is an exam case's (loaded by `exam_start`), to
+    /// be replaced by the home case's when the trainee leaves the exam.
+    exam_leg: std::sync::atomic::AtomicBool,
 }
 
 impl AppState {
@@ -71,6 +78,7 @@ impl AppState {
             config,
             owner: Mutex::new((None, 0)),
             mesh_epoch: std::sync::atomic::AtomicU64::new(0),
+            exam_leg: std::sync::atomic::AtomicBool::new(false),
         }
     }
 
@@ -139,6 +147,8 @@ impl AppState {
                     self.exam().abandon();
                     return Err(format!("could not load the exam's case: {e}"));
                 }
+                self.exam_leg
+                    .store(true, std::sync::atomic::Ordering::Release);
                 // The patient's leg has its own rest shape.
                 self.mesh_epoch
                     .fetch_add(1, std::sync::atomic::Ordering::AcqRel);
@@ -152,6 +162,18 @@ impl AppState {
             }
             ClientMessage::Viewer(ViewerCommand::ExamStop) => {
                 self.exam().stop();
+                // Back to the leg the server started with, whose vein the
+                // page's vein control sets again.
+                if self
+                    .exam_leg
+                    .swap(false, std::sync::atomic::Ordering::AcqRel)
+                {
+                    self.control
+                        .set_case(self.config.home_case.as_ref())
+                        .map_err(|e| format!("could not restore the practice leg: {e}"))?;
+                    self.mesh_epoch
+                        .fetch_add(1, std::sync::atomic::Ordering::AcqRel);
+                }
                 Ok(())
             }
             // Flow control and ownership, handled by the connection itself.

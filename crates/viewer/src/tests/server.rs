@@ -32,6 +32,7 @@ async fn start_with(fake: Arc<FakeLive>, idle_timeout: Duration) -> std::net::So
         state_rate: 100.0,
         allow_remote: false,
         idle_timeout,
+        home_case: None,
     };
     tokio::spawn(serve_on(
         listener,
@@ -358,6 +359,21 @@ async fn exam_loads_a_case_detects_presses_and_reveals_on_finish() {
     let log = cases[0].1.lock().unwrap();
     assert_eq!((log.events.len(), log.calls.len()), (2, 2));
     assert_eq!(log.score.as_ref(), Some(&last.score));
+    drop(log);
+    drop(cases);
+    // Leaving the exam puts the practice leg back (the server's home case,
+    // here the scenario's own leg): a new `hello` with its mesh, and the
+    // vein control is the page's again.
+    send(&mut ws, r#"{"type":"exam_stop"}"#).await;
+    let mut hello = false;
+    while !hello {
+        hello = matches!(
+            next_json(&mut ws, |m| !matches!(m, ServerMessage::Error { .. })).await,
+            ServerMessage::Hello { .. }
+        );
+    }
+    assert_eq!(fake.case_name(), None);
+    next_state(&mut ws, |s| s.vein.is_some()).await;
 }
 
 #[tokio::test]
