@@ -78,7 +78,8 @@ const findThigh = () => {
     for (let fx = 0.3; fx <= 0.7; fx += 0.02) {
       const x = r.left + fx * r.width, y = r.top + fy * r.height;
       const hit = scene.pick(x, y);
-      if (hit && Math.abs(hit.theta) < 0.6) {
+      // The point must reach the canvas (not the guide's card over the view).
+      if (hit && Math.abs(hit.theta) < 0.6 && document.elementFromPoint(x, y) === scene.canvas) {
         const score = Math.abs(hit.z) + Math.abs(hit.theta) * 0.05;
         if (!best || score < best.score) best = { x, y, score, hit };
       }
@@ -270,6 +271,14 @@ try {
   }, before.physics, 'the force to rise under the probe');
   check('dragging the probe raises the force', true,
     `|F| ${before.physics.toFixed(2)} → ${pressed.physics.toFixed(2)} N (rendered ${pressed.rendered.toFixed(2)} N) at depth ${(pressed.depth * 1000).toFixed(1)} mm`);
+  // The guided start (issue 19) opened on this first visit (a fresh browser
+  // profile) and ticked off "place the probe on the skin" from the state.
+  const guideStep = await page.evaluate(() => {
+    const g = document.getElementById('guide');
+    return g.hidden ? null : Number(g.dataset.step);
+  });
+  check('the guided start opened on the first visit and followed the press', guideStep !== null && guideStep >= 2,
+    guideStep === null ? 'the guide is hidden' : `at step ${guideStep} of 5`);
   await page.waitForTimeout(1500); // let the plot and the image fill in
   await page.evaluate(() => { document.querySelector('aside').scrollTop = 0; });
   await page.screenshot({ path: join(shots, '02-pressing.png') });
@@ -398,6 +407,15 @@ try {
     `|F| ${keyed.f.toFixed(2)} N at ${(keyed.depth * 1000).toFixed(1)} mm, ${mouseEvents} mouse events`);
   // A shortcut key on a focused control acts on the control, not the probe.
   const depthBefore = await page.evaluate(() => window.echothigh.probe.depth);
+  // The technical status and settings (issue 19) are hidden on a first visit
+  // and shown by their toggle.
+  const techShown = () => page.evaluate(() => document.getElementById('status-panel').getClientRects().length > 0 &&
+    document.getElementById('mode').getClientRects().length > 0);
+  const techBefore = await techShown();
+  await page.click('#tech-open');
+  const techAfter = await techShown();
+  check('the technical status is hidden until its toggle is pressed', !techBefore && techAfter,
+    `before ${techBefore ? 'shown' : 'hidden'}, after ${techAfter ? 'shown' : 'hidden'}`);
   await page.focus('#mode');
   await page.keyboard.press('w');
   check('shortcuts do not act while a control has focus',

@@ -5,6 +5,7 @@
 import { ThighScene } from './scene.js';
 import { EchoView, ForcePlot, Gauge, norm, showStatus } from './panels.js';
 import { showExam } from './exam.js';
+import { Guide } from './guide.js';
 
 const PROTOCOL_VERSION = 1;
 const FRAME_IMAGE = 1;
@@ -46,6 +47,15 @@ live.scene = scene; // for the browser test and the console
 const echo = new EchoView($('echo'));
 const plot = new ForcePlot($('plot'), 5);
 const gauge = new Gauge($('gauge-fill'), $('gauge-limit'), $('gauge-value'));
+// The technical status and settings, hidden until asked for (remembered).
+function showTech(on) {
+  document.body.classList.toggle('tech-on', on);
+  $('tech-open').setAttribute('aria-pressed', String(on));
+  try { localStorage.setItem('echothigh.tech', on ? '1' : '0'); } catch { /* not remembered */ }
+}
+$('tech-open').addEventListener('click', () => showTech(!document.body.classList.contains('tech-on')));
+showTech((() => { try { return localStorage.getItem('echothigh.tech') === '1'; } catch { return false; } })());
+const guide = new Guide($('guide'), document.querySelector('#view3d .help'), $('guide-open'));
 
 // ---- connection -----------------------------------------------------------
 let ws = null;
@@ -173,6 +183,7 @@ function onState(s) {
   showStatus(s, renderedFps);
   syncControls(s);
   showExam(s.exam, s.level_s, send);
+  guide.update(s, live.probe);
   $('observer').hidden = !s.observer;
   showBehind(s);
 }

@@ -27,11 +27,14 @@ pub trait RecordSink: Send {
     }
 }
 
+/// Per case started: its name and its records, shared.
+pub type CaseLogs = Arc<Mutex<Vec<(String, Arc<Mutex<MemoryLog>>)>>>;
+
 /// Keeps every case's records in memory, readable by tests.
 #[derive(Clone, Default)]
 pub struct MemorySink {
     /// Per case started: its name and its records.
-    pub cases: Arc<Mutex<Vec<(String, Arc<Mutex<MemoryLog>>)>>>,
+    pub cases: CaseLogs,
 }
 
 /// A shared [`MemoryLog`].

@@ -355,12 +355,12 @@ async fn exam_loads_a_case_detects_presses_and_reveals_on_finish() {
         .truth
         .iter()
         .any(|t| t.vein == "pv" && t.kind == "acute_occlusive"));
-    let cases = sink.cases.lock().unwrap();
-    let log = cases[0].1.lock().unwrap();
-    assert_eq!((log.events.len(), log.calls.len()), (2, 2));
-    assert_eq!(log.score.as_ref(), Some(&last.score));
-    drop(log);
-    drop(cases);
+    {
+        let cases = sink.cases.lock().unwrap();
+        let log = cases[0].1.lock().unwrap();
+        assert_eq!((log.events.len(), log.calls.len()), (2, 2));
+        assert_eq!(log.score.as_ref(), Some(&last.score));
+    }
     // Leaving the exam puts the practice leg back (the server's home case,
     // here the scenario's own leg): a new `hello` with its mesh, and the
     // vein control is the page's again.
