@@ -83,7 +83,15 @@ pub fn section_anatomy_with(
         a => a,
     };
     let (al, ad, adia) = cut(artery)?;
-    let (fl, fd, fdia) = cut(StructureId::Femur)?;
+    // Below the knee joint the femur has ended: the tibia is the bone
+    // under the popliteal vessels down to the trifurcation.
+    let bone =
+        if section.get(StructureId::Femur).is_none() && section.get(StructureId::Tibia).is_some() {
+            StructureId::Tibia
+        } else {
+            StructureId::Femur
+        };
+    let (fl, fd, fdia) = cut(bone)?;
     let femur_r = 0.5 * fdia;
     let mut c = base.clone();
     c.skin_thickness = section.skin_depth;

@@ -173,7 +173,10 @@ fn webs_are_bright_lines_across_the_lumen() {
 /// segment (beyond the 4 mm transition): the ratio of the drawn lumen
 /// radii is the chronic diameter factor 0.85 (residual post-thrombotic
 /// segments 0.7–2.8 mm smaller than the other leg's in a duplex follow-up
-/// of 56 patients, i.e. 7–28 % of a 10 mm vein) times the healthy vein's
+/// of 56 patients more than 6 months after DVT, i.e. 7–28 % of a 10 mm
+/// vein: an abstract found by the project's search without its address or
+/// title; the 0.85 itself is the anatomy's `CHRONIC_DISTENSION`, reference
+/// row 24) times the healthy vein's
 /// own taper between the two levels (the anatomy's radius profile).
 #[test]
 fn chronic_segment_is_contracted() {

@@ -132,3 +132,25 @@ fn every_section_from_the_ligament_to_the_knee_draws() {
         );
     }
 }
+
+/// Just below the knee joint, where the femur has ended, the popliteal
+/// section draws over the tibia (`section_image`'s bone fallback): every
+/// millimetre from 2 to 20 mm into the tibia's range on each preset.
+/// (Further down, the leg model's plane stops cutting the tibia and, near
+/// the model's end, the popliteal vessels: not drawn, see the report.)
+#[test]
+fn popliteal_below_the_knee_draws_over_the_tibia() {
+    for preset in PRESETS {
+        let a = Anatomy::new(Patient::preset(preset).unwrap()).unwrap();
+        let (t0, _) = a
+            .tube(echothigh_anatomy::StructureId::Tibia)
+            .unwrap()
+            .s_range();
+        for k in 2..=20 {
+            let s = t0 + k as f64 * 1e-3;
+            if let Err(e) = config(&a, s) {
+                panic!("{preset} at {:.0} mm: {e:#}", s * 1e3);
+            }
+        }
+    }
+}
