@@ -477,11 +477,13 @@ impl Renderer {
             set.clear();
             if let Some(a) = &self.anatomy {
                 for (sv, &r) in a.vessels().iter().zip(&ratios[..n]) {
-                    set.push(VesselWarp::new(
-                        &sv.vessel,
-                        u,
-                        compensated_ratio(r, s, def.bone_depth),
-                    ));
+                    let mut w =
+                        VesselWarp::new(&sv.vessel, u, compensated_ratio(r, s, def.bone_depth));
+                    if let Some(c) = sv.condition() {
+                        // A floating tail sways with breathing (issue 13).
+                        w = w.with_tail(c.fill, c.tail_shift(input.time));
+                    }
+                    set.push(w);
                 }
             }
         }
