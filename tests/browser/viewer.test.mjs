@@ -123,7 +123,14 @@ const THROTTLE = 2;
 const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
   const MAX_STALE_IMAGES = maxStale; // the module's constant, passed into the page
   const L = window.echothigh;
-  const TIMEOUT = 3000; // ms, for the state; a miss is counted as this long
+  // A command misses when its effect is not in the state once the
+  // simulation, as the page sees it, has run SIM_TIMEOUT past the command: a
+  // backlog of stale states (issue 19: 4–6 s) misses, while a machine that
+  // starves the physics (its simulated time then runs slower than the wall
+  // clock) only delays the effect. WALL_TIMEOUT ends a stalled stream.
+  const SIM_TIMEOUT = 3; // s of simulated time
+  const WALL_TIMEOUT = 30000; // ms
+  const TIMEOUT = 3000; // ms, the state lag a miss is counted as
   // Once the state shows the effect, how long to wait for the image before
   // giving up on it (it only stops a stuck stream from hanging the test; the
   // image's criterion is the count of stale images, see the checks).
@@ -150,6 +157,7 @@ const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
   for (let i = 0; i < n; i++) {
     const depth = i % 2 === 0 ? 0.016 : 0.008;
     const f0 = force(L.state);
+    const sim0 = L.state.time;
     const up = depth > 0.012;
     const r = await new Promise((resolve) => {
       let at = null, simTime = null, staleImages = 0;
@@ -162,13 +170,13 @@ const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
             at = now; simTime = d.time;
             clearTimeout(timer);
             timer = setTimeout(() => done(null), IMAGE_WAIT);
-          }
+          } else if (d.time > sim0 + SIM_TIMEOUT) done(null);
         } else if (kind === 'image' && at !== null && d !== null) {
           if (d >= simTime) done({ state: at - t0, image: now - t0, stale: staleImages });
           else staleImages++;
         }
       };
-      timer = setTimeout(() => done(null), TIMEOUT);
+      timer = setTimeout(() => done(null), WALL_TIMEOUT);
       function done(v) {
         if (!v || v.stale > MAX_STALE_IMAGES) misses.push({ i, effect_seen: at !== null, stale_images: staleImages, sim_time: simTime, image_time: L.imageTime, f0, f: force(L.state), last_error: L.lastError, observer: L.state.observer });
         clearTimeout(timer); L.listeners.splice(L.listeners.indexOf(fn), 1); resolve(v);
@@ -464,7 +472,7 @@ try {
   await cdp.send('Emulation.setCPUThrottlingRate', { rate: 1 });
   writeFileSync(join(shots, 'viewer-lag.json'), JSON.stringify(lag, null, 2));
   const ms = (x) => (x === null ? 'n/a' : `${x.toFixed(0)} ms`);
-  console.log(`info lag over ${lag.commands} commands (${lag.missed} missed: no state effect within 3 s, counted as 3 s, or more than ${MAX_STALE_IMAGES} stale images first; stale images p50 ${lag.stale_images.p50} max ${lag.stale_images.max}): state p50 ${ms(lag.state.p50)} p95 ${ms(lag.state.p95)}, ` +
+  console.log(`info lag over ${lag.commands} commands (${lag.missed} missed: no state effect within 3 s of simulated time, counted as 3 s, or more than ${MAX_STALE_IMAGES} stale images first; stale images p50 ${lag.stale_images.p50} max ${lag.stale_images.max}): state p50 ${ms(lag.state.p50)} p95 ${ms(lag.state.p95)}, ` +
     `image p50 ${ms(lag.image.p50)} p95 ${ms(lag.image.p95)}; page frames p95 ${ms(lag.frame_p95)}; ${(lag.bytes_per_s / 1000).toFixed(0)} KB/s (${join(shots, 'viewer-lag.json')})`);
   // The wire's budget is 360 KB/s of payload by construction (the server's
   // token bucket, frames.rs), so 400 KB/s holds whatever the machine's load.
@@ -491,10 +499,10 @@ try {
   const keepsUp = lag.physics_rate >= 0.8 * lag.physics_rate_setting;
   const bound = 150 + 2 * lag.frame_p95;
   // What is asserted: no backlog. Every one of the 50 commands showed its
-  // effect in the state within 3 s (before flow control, issue 19 measured
+  // effect in the state within 3 s of simulated time (before flow control, issue 19 measured
   // 4–6 s at 1280×800, so every command would miss), and in the image after
   // at most MAX_STALE_IMAGES stale images (derived above).
-  check(`every command reaches the state within 3 s and the image after at most ${MAX_STALE_IMAGES} stale images (no backlog)`, lag.missed === 0,
+  check(`every command reaches the state within 3 s of simulated time and the image after at most ${MAX_STALE_IMAGES} stale images (no backlog)`, lag.missed === 0,
     `${lag.missed} of ${lag.commands} missed: ${JSON.stringify(lag.misses)}`);
   // Reported, not asserted: the frame-interval bounds above are not yet
   // derived well enough to hold (on an idle machine the state's p95 was
