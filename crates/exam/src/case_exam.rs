@@ -5,11 +5,11 @@
 //! call when it is made, the score when the case is finished), so that a
 //! crash loses nothing already done.
 
-use crate::coverage::Coverage;
+use crate::coverage::{event_state, Coverage};
 use crate::detector::{DetectorError, EventDetector, ExamSample};
-use crate::score::{score_case, truth_at, ScoreInput};
+use crate::score::{score_case, truth_for_call, ScoreInput};
 use crate::{
-    Call, CaseScore, CompressionEvent, ExamLog, Finding, LogError, Protocol, ProtocolSite,
+    BinState, Call, CaseScore, CompressionEvent, ExamLog, Finding, LogError, Protocol, ProtocolSite,
 };
 use echothigh_anatomy::VeinTruth;
 use echothigh_cases::Case;
@@ -105,7 +105,9 @@ impl CaseExam {
 
     /// The trainee calls `finding` at the protocol's site `site` at time `t`
     /// (s since the case started); a later call on a site replaces an
-    /// earlier one in the score, both are recorded.
+    /// earlier one in the score, both are recorded. The call's truth is
+    /// the one it is scored against ([`truth_for_call`]: a site within the
+    /// probe's footprint of a thrombus's end accepts either finding).
     pub fn call(
         &mut self,
         site: &str,
@@ -130,7 +132,7 @@ impl CaseExam {
             vein: x.vein.clone(),
             s: x.s,
             finding,
-            truth: truth_at(&self.truth, &x.vein, x.s).unwrap_or(Finding::Normal),
+            truth: truth_for_call(&self.truth, &x.vein, x.s, Some(finding)),
             t,
         };
         log.call(&call)?;
@@ -196,6 +198,33 @@ impl CaseExam {
             .rev()
             .find(|c| c.site == site)
             .map(|c| c.finding)
+    }
+
+    /// What the presses at the protocol's site `site` showed, strongest
+    /// first (the coverage's precedence): walls met → normal; not met with
+    /// adequate pressure (artery deformed) → acute DVT (review §1
+    /// "Positive criterion"); pressed without adequate pressure →
+    /// indeterminate. A press counts for the site when it was over the
+    /// site's vein within half the site spacing (1 cm). `None` when no
+    /// press examined it, or no such site.
+    pub fn seen_at(&self, site: &str) -> Option<Finding> {
+        let x = self.sites.iter().find(|x| x.name == site)?;
+        let half = 0.5 * crate::protocol::WHOLE_LEG_SPACING + 1e-12;
+        self.events
+            .iter()
+            .filter(|e| e.vein.as_deref() == Some(x.vein.as_str()) && (e.s - x.s).abs() <= half)
+            .map(event_state)
+            .max_by_key(|s| match s {
+                BinState::NotExamined => 0,
+                BinState::InadequatePressure => 1,
+                BinState::NotClosed => 2,
+                BinState::Closed => 3,
+            })
+            .map(|s| match s {
+                BinState::Closed => Finding::Normal,
+                BinState::NotClosed => Finding::AcuteDvt,
+                _ => Finding::Indeterminate,
+            })
     }
 
     /// Whether a press is under way.
