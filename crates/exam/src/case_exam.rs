@@ -7,9 +7,11 @@
 
 use crate::coverage::{event_state, Coverage};
 use crate::detector::{DetectorError, EventDetector, ExamSample};
+use crate::doppler::{doppler_sites, doppler_truth, score_doppler};
 use crate::score::{score_case, truth_for_call, ScoreInput};
 use crate::{
-    BinState, Call, CaseScore, CompressionEvent, ExamLog, Finding, LogError, Protocol, ProtocolSite,
+    BinState, Call, CaseScore, CompressionEvent, DopplerCall, DopplerFinding, ExamLog, Finding,
+    LogError, Protocol, ProtocolSite,
 };
 use echothigh_anatomy::VeinTruth;
 use echothigh_cases::Case;
@@ -25,6 +27,14 @@ pub enum CaseExamError {
     /// A sample was malformed (the detector names the field).
     #[error(transparent)]
     Sample(#[from] DetectorError),
+    /// A Doppler call named no Doppler site.
+    #[error("no Doppler site `{site}` (the Doppler sites: {known})")]
+    UnknownDopplerSite {
+        /// The name given.
+        site: String,
+        /// The names there are.
+        known: String,
+    },
     /// A call named no site of the protocol.
     #[error("no site `{site}` in the {protocol} protocol (its sites: {known})")]
     UnknownSite {
@@ -50,6 +60,9 @@ pub struct CaseExam {
     coverage: Coverage,
     events: Vec<CompressionEvent>,
     calls: Vec<Call>,
+    doppler_sites: Vec<ProtocolSite>,
+    doppler_truth: Vec<DopplerFinding>,
+    doppler_calls: Vec<DopplerCall>,
     last_t: f64,
     peak_force: f64,
 }
@@ -58,7 +71,14 @@ impl CaseExam {
     /// Starts examining `case` under `protocol`: every site undone, every
     /// bin not examined.
     pub fn new(case: &Case, protocol: Protocol) -> CaseExam {
+        let doppler_sites = doppler_sites(&case.anatomy);
         CaseExam {
+            doppler_truth: doppler_sites
+                .iter()
+                .map(|x| doppler_truth(case, x.s))
+                .collect(),
+            doppler_sites,
+            doppler_calls: Vec::new(),
             case: case.file.name.clone(),
             protocol,
             sites: protocol.sites(&case.anatomy),
@@ -140,6 +160,42 @@ impl CaseExam {
         Ok(self.calls.last().expect("just pushed"))
     }
 
+    /// The trainee reads the spectral Doppler at the Doppler site `site`
+    /// (`cfv`, `popliteal`: [`crate::doppler::doppler_sites`]) as `finding`
+    /// at time `t` (s); a later call replaces an earlier one in the score,
+    /// both are recorded.
+    pub fn call_doppler(
+        &mut self,
+        site: &str,
+        finding: DopplerFinding,
+        t: f64,
+        log: &mut dyn ExamLog,
+    ) -> Result<&DopplerCall, CaseExamError> {
+        let Some(i) = self.doppler_sites.iter().position(|x| x.name == site) else {
+            return Err(CaseExamError::UnknownDopplerSite {
+                site: site.to_string(),
+                known: self
+                    .doppler_sites
+                    .iter()
+                    .map(|x| x.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            });
+        };
+        let x = &self.doppler_sites[i];
+        let call = DopplerCall {
+            site: x.name.clone(),
+            vein: x.vein.clone(),
+            s: x.s,
+            finding,
+            truth: self.doppler_truth[i],
+            t,
+        };
+        log.doppler(&call)?;
+        self.doppler_calls.push(call);
+        Ok(self.doppler_calls.last().expect("just pushed"))
+    }
+
     /// Ends the case at `t` (s): a press still under way is closed and
     /// recorded, the case is scored, and the coverage and score are sent to
     /// `log`.
@@ -148,7 +204,7 @@ impl CaseExam {
         if let Some(e) = self.detector.finish(t) {
             self.keep_event(e, log)?;
         }
-        let score = score_case(&ScoreInput {
+        let mut score = score_case(&ScoreInput {
             case: &self.case,
             protocol: self.protocol,
             sites: &self.sites,
@@ -157,6 +213,11 @@ impl CaseExam {
             calls: &self.calls,
             coverage: &self.coverage,
         });
+        score.doppler = score_doppler(
+            &self.doppler_sites,
+            &self.doppler_truth,
+            &self.doppler_calls,
+        );
         log.finish(self.coverage.bins(), &score)?;
         Ok(score)
     }
@@ -225,6 +286,25 @@ impl CaseExam {
                 BinState::NotClosed => Finding::AcuteDvt,
                 _ => Finding::Indeterminate,
             })
+    }
+
+    /// The Doppler sites (`cfv`, `popliteal`).
+    pub fn doppler_sites(&self) -> &[ProtocolSite] {
+        &self.doppler_sites
+    }
+
+    /// The Doppler calls so far.
+    pub fn doppler_calls(&self) -> &[DopplerCall] {
+        &self.doppler_calls
+    }
+
+    /// The latest Doppler call at `site`, if any.
+    pub fn doppler_at(&self, site: &str) -> Option<DopplerFinding> {
+        self.doppler_calls
+            .iter()
+            .rev()
+            .find(|c| c.site == site)
+            .map(|c| c.finding)
     }
 
     /// Whether a press is under way.

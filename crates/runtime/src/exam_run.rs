@@ -90,6 +90,9 @@ pub fn run_exam(script: &TraineeScript, case: &Case, log: &mut dyn ExamLog) -> R
     let sites = script.protocol().sites(&case.anatomy);
     let names: Vec<&str> = sites.iter().map(|x| x.name.as_str()).collect();
     script.check_sites(&names)?;
+    let doppler = echothigh_exam::doppler::doppler_sites(&case.anatomy);
+    let names: Vec<&str> = doppler.iter().map(|x| x.name.as_str()).collect();
+    script.check_doppler_sites(&names)?;
     let mut w = Walker::new(&scenario, script, case, log)?;
     let mut pressed = Vec::new();
     let mut unexaminable = Vec::new();
@@ -123,6 +126,10 @@ pub fn run_exam(script: &TraineeScript, case: &Case, log: &mut dyn ExamLog) -> R
             let finding = Finding::from_name(&c.finding).expect("validated");
             w.exam.call(&c.site, finding, t, &mut *w.log)?;
         }
+    }
+    for d in &script.doppler {
+        let finding = d.finding().expect("validated");
+        w.exam.call_doppler(&d.site, finding, t, &mut *w.log)?;
     }
     let score = w.exam.finish(t, &mut *w.log)?;
     Ok(ExamOutcome {
