@@ -138,6 +138,16 @@ pub enum ViewerCommand {
         /// `indeterminate`).
         finding: Finding,
     },
+    /// Call the spectral Doppler at a Doppler site (`cfv`, `popliteal`):
+    /// the flow pattern and whether a calf squeeze augments it.
+    ExamDoppler {
+        /// The Doppler site's name.
+        site: String,
+        /// `phasic`, `continuous` or `absent`.
+        flow: echothigh_exam::FlowPattern,
+        /// The flow augments on a calf squeeze.
+        augments: bool,
+    },
     /// Finish the open case: score it and reveal its truth.
     ExamFinish,
     /// Leave exam mode (an open case is dropped unscored).

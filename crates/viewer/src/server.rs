@@ -157,6 +157,14 @@ impl AppState {
             ClientMessage::Viewer(ViewerCommand::ExamCall { site, finding }) => {
                 self.exam().call(&site, finding).map_err(|e| e.to_string())
             }
+            ClientMessage::Viewer(ViewerCommand::ExamDoppler {
+                site,
+                flow,
+                augments,
+            }) => self
+                .exam()
+                .call_doppler(&site, echothigh_exam::DopplerFinding { flow, augments })
+                .map_err(|e| e.to_string()),
             ClientMessage::Viewer(ViewerCommand::ExamFinish) => {
                 self.exam().finish().map_err(|e| e.to_string())
             }

@@ -47,6 +47,9 @@ impl ExamLog for SharedLog {
     fn call(&mut self, c: &echothigh_exam::Call) -> Result<(), LogError> {
         self.lock().call(c)
     }
+    fn doppler(&mut self, c: &echothigh_exam::DopplerCall) -> Result<(), LogError> {
+        self.lock().doppler(c)
+    }
     fn finish(
         &mut self,
         coverage: &[echothigh_exam::CoverageBin],
