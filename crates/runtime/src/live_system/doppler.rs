@@ -229,6 +229,7 @@ impl FlowImaging {
     /// writes the overlay codes into `overlay` (else empties it), in
     /// spectral mode appends the lines up to the frame's time to
     /// `shared.lines`; publishes the status.
+    #[allow(clippy::too_many_arguments)]
     pub fn frame(
         &mut self,
         shared: &DopplerShared,
