@@ -292,6 +292,49 @@ try {
   await page.screenshot({ path: join(shots, '02-pressing.png') });
   await page.mouse.up();
 
+  // Doppler (issue 17), one short step: the probe eased to 4 mm where it
+  // was (the vessels open), colour mode colours pixels of the image
+  // canvas (saturated: its max and min channels 60 or more apart, which no
+  // grey pixel is), with the bytes per second of colour on within the
+  // budget; spectral mode draws the spectrogram (lines arrive and the
+  // trace is not black); back to B-mode for the rest of the test.
+  await page.evaluate(() => {
+    const p = window.echothigh.probe;
+    window.echothigh.send({ type: 'probe', theta: p.theta, z: p.z, depth: 0.004, tilt: 0 });
+  });
+  await page.click('input[name="dmode"][value="color"]');
+  const colourAt = await page.evaluate(() => ({ bytes: window.echothigh.bytes, t: performance.now() }));
+  const saturated = () => {
+    const c = document.getElementById('echo');
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) {
+      if (Math.max(d[i], d[i + 1], d[i + 2]) - Math.min(d[i], d[i + 1], d[i + 2]) >= 60) n++;
+    }
+    return n;
+  };
+  const coloured = await until(page, saturated, null, 'coloured pixels in the image (colour mode)');
+  await page.waitForTimeout(2500);
+  const colourRate = await page.evaluate((a) => (window.echothigh.bytes - a.bytes) / ((performance.now() - a.t) / 1000), colourAt);
+  await page.screenshot({ path: join(shots, '02b-colour.png') });
+  check('colour mode colours the image', coloured > 0, `${coloured} coloured pixels; ${(colourRate / 1000).toFixed(0)} KB/s with colour on`);
+  check('bytes per second with colour on within the 400 KB/s budget', colourRate <= 400_000, `${(colourRate / 1000).toFixed(0)} KB/s`);
+  await page.click('input[name="dmode"][value="spectral"]');
+  const trace = await until(page, () => {
+    const d = window.echothigh.doppler;
+    if (!d || d.linesShown < 50) return null;
+    const c = document.getElementById('spectrum');
+    const px = c.getContext('2d').getImageData(0, 0, c.width - 60, c.height).data;
+    let sum = 0;
+    for (let i = 0; i < px.length; i += 4) sum += px[i];
+    const mean = sum / (px.length / 4);
+    return mean > 2 ? { lines: d.linesShown, mean } : null;
+  }, null, 'the spectrogram drawn (spectral mode)');
+  await page.screenshot({ path: join(shots, '02c-spectral.png') });
+  check('spectral mode draws the spectrogram', true, `${trace.lines} lines, mean level ${trace.mean.toFixed(1)}`);
+  await page.click('input[name="dmode"][value="bmode"]');
+  await until(page, () => window.echothigh.state.doppler && window.echothigh.state.doppler.mode === 'bmode', null, 'B-mode again');
+
   // Vein state.
   await page.selectOption('#vein', 'chronic');
   await until(page, () => window.echothigh.state.vein === 'chronic', null, 'the vein to become chronic');

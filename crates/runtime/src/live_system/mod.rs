@@ -17,6 +17,10 @@
 //! thrombus segments; the imaging thread publishes, with each frame, a
 //! reading of the section under the probe ([`crate::live::SectionReading`]).
 
+mod doppler;
+mod doppler_control;
+#[cfg(test)]
+mod doppler_tests;
 mod imaging_source;
 mod publish;
 mod session;
@@ -106,6 +110,8 @@ pub struct LiveSystem {
     inner: Mutex<Inner>,
     settings: Mutex<Settings>,
     imaging: Mutex<Option<ImagingThread>>,
+    /// The live flow's controls, lines and status (issue 17).
+    doppler: Arc<doppler::DopplerShared>,
 }
 
 /// The hand target for a probe placed at `theta` (rad, 0 = top, positive
@@ -203,6 +209,7 @@ impl LiveSystem {
             }),
             image: Mutex::new(ImageSlot {
                 pixels: vec![0; img.columns * img.rows],
+                overlay: Vec::new(),
                 width: img.columns as u32,
                 height: img.rows as u32,
                 frame: 0,
@@ -217,11 +224,14 @@ impl LiveSystem {
         let leg = physics.model().mesh().leg().cloned();
         let target = target_on_surface(&scenario, leg.as_ref(), 0.0, 0.0, LIFTED_DEPTH, 0.0)
             .map_err(anyhow::Error::msg)?;
+        let doppler = Arc::new(doppler::DopplerShared::default());
+        doppler.set_case(case);
         let case = case.map(|c| (c.file.name.clone(), Arc::new(c.thrombi.clone())));
         let imaging = ImagingThread::spawn(
             shared.clone(),
             &scenario,
             case.as_ref().map(|c| c.1.clone()),
+            doppler.clone(),
         )?;
         let inner = Inner {
             scenario,
@@ -238,6 +248,7 @@ impl LiveSystem {
             settings: Mutex::new(Settings::of(&inner)),
             inner: Mutex::new(inner),
             imaging: Mutex::new(Some(imaging)),
+            doppler,
         });
         {
             let mut inner = system
@@ -371,10 +382,12 @@ impl LiveSystem {
             device: None,
         };
         self.start_from(&mut inner, carried, true)?;
+        self.doppler.set_case(case);
         let imaging = ImagingThread::spawn(
             self.shared.clone(),
             &inner.scenario,
             inner.case.as_ref().map(|c| c.1.clone()),
+            self.doppler.clone(),
         )?;
         if let Ok(mut slot) = self.imaging.lock() {
             imaging.wake();
@@ -482,6 +495,47 @@ impl LiveControl for LiveSystem {
 
     fn vein(&self) -> VeinState {
         vein_of(self.shared.vein.load(Ordering::Relaxed))
+    }
+
+    fn doppler(&self, cmd: crate::live_doppler::DopplerCommand) -> Result<(), String> {
+        cmd.validate().map_err(|e| e.to_string())?;
+        let now = self
+            .shared
+            .image_input
+            .lock()
+            .map(|i| i.time)
+            .map_err(|_| "the physics' image input is poisoned".to_string())?;
+        self.doppler.command(cmd, now)
+    }
+
+    fn doppler_status(&self) -> Option<crate::live_doppler::DopplerStatus> {
+        Some(self.doppler.status())
+    }
+
+    fn flow_image(&self, pixels: &mut Vec<u8>, overlay: &mut Vec<u8>) -> ImageInfo {
+        match self.shared.image.lock() {
+            Ok(s) => {
+                pixels.clone_from(&s.pixels);
+                overlay.clone_from(&s.overlay);
+                ImageInfo {
+                    width: s.width,
+                    height: s.height,
+                    frame: s.frame,
+                    time: s.time,
+                }
+            }
+            Err(_) => ImageInfo::default(),
+        }
+    }
+
+    fn spectral_lines(&self, from: u64, out: &mut crate::live_doppler::SpectralLines) {
+        match self.doppler.lines.lock() {
+            Ok(l) => l.copy(from, out),
+            Err(_) => {
+                out.count = 0;
+                out.data.clear();
+            }
+        }
     }
 
     fn limits(&self) -> CommandLimits {

@@ -16,11 +16,11 @@ use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio_tungstenite::tungstenite::{client::IntoClientRequest, Message};
 
-type Client =
+pub(super) type Client =
     tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
 
 /// Starts a server on a free loopback port; returns its address.
-async fn start(fake: Arc<FakeLive>) -> std::net::SocketAddr {
+pub(super) async fn start(fake: Arc<FakeLive>) -> std::net::SocketAddr {
     start_with(fake, ServerConfig::default().idle_timeout).await
 }
 
@@ -53,7 +53,7 @@ fn practice() -> ExamSession {
     )
 }
 
-async fn connect(addr: std::net::SocketAddr) -> Client {
+pub(super) async fn connect(addr: std::net::SocketAddr) -> Client {
     let (ws, _) = tokio_tungstenite::connect_async(format!("ws://{addr}/ws"))
         .await
         .unwrap();
@@ -62,7 +62,7 @@ async fn connect(addr: std::net::SocketAddr) -> Client {
 
 /// Next message of the connection (fails the test after 5 s), without
 /// acknowledging it.
-async fn next_raw(ws: &mut Client) -> Message {
+pub(super) async fn next_raw(ws: &mut Client) -> Message {
     tokio::time::timeout(Duration::from_secs(5), ws.next())
         .await
         .expect("no message within 5 s")
@@ -72,12 +72,18 @@ async fn next_raw(ws: &mut Client) -> Message {
 
 /// Next message of the connection; a state or an image is acknowledged at
 /// once, as a page that keeps up does (flow control).
-async fn next(ws: &mut Client) -> Message {
+pub(super) async fn next(ws: &mut Client) -> Message {
     let m = next_raw(ws).await;
     if let Message::Binary(b) = &m {
         if matches!(
             FrameHeader::parse(b),
-            Some((h, _)) if matches!(h.kind, FrameKind::ImagePng | FrameKind::ImageDelta)
+            Some((h, _)) if matches!(
+                h.kind,
+                FrameKind::ImagePng
+                    | FrameKind::ImageDelta
+                    | FrameKind::ImagePngFlow
+                    | FrameKind::ImageDeltaFlow
+            )
         ) {
             send(ws, r#"{"type":"image_ack"}"#).await;
         }
@@ -95,7 +101,10 @@ async fn next(ws: &mut Client) -> Message {
 }
 
 /// Next JSON message satisfying `pred`, skipping others.
-async fn next_json(ws: &mut Client, mut pred: impl FnMut(&ServerMessage) -> bool) -> ServerMessage {
+pub(super) async fn next_json(
+    ws: &mut Client,
+    mut pred: impl FnMut(&ServerMessage) -> bool,
+) -> ServerMessage {
     for _ in 0..500 {
         if let Message::Text(t) = next(ws).await {
             let env: Envelope = serde_json::from_str(t.as_str()).unwrap();
@@ -108,18 +117,21 @@ async fn next_json(ws: &mut Client, mut pred: impl FnMut(&ServerMessage) -> bool
     panic!("no matching message in 500");
 }
 
-async fn next_state(ws: &mut Client, mut pred: impl FnMut(&ViewState) -> bool) -> ViewState {
+pub(super) async fn next_state(
+    ws: &mut Client,
+    mut pred: impl FnMut(&ViewState) -> bool,
+) -> ViewState {
     match next_json(ws, |m| matches!(m, ServerMessage::State(s) if pred(s))).await {
         ServerMessage::State(s) => s,
         _ => unreachable!(),
     }
 }
 
-async fn send(ws: &mut Client, text: &str) {
+pub(super) async fn send(ws: &mut Client, text: &str) {
     ws.send(Message::text(text)).await.unwrap();
 }
 
-async fn next_error(ws: &mut Client) -> String {
+pub(super) async fn next_error(ws: &mut Client) -> String {
     match next_json(ws, |m| matches!(m, ServerMessage::Error { .. })).await {
         ServerMessage::Error { message } => message,
         _ => unreachable!(),
@@ -610,7 +622,7 @@ async fn wait_watchers(fake: &FakeLive, n: usize) {
 }
 
 /// An 8-bit grayscale PNG's pixels.
-fn decode_png(png_bytes: &[u8]) -> Vec<u8> {
+pub(super) fn decode_png(png_bytes: &[u8]) -> Vec<u8> {
     let mut reader = png::Decoder::new(png_bytes).read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader.next_frame(&mut buf).unwrap();
