@@ -402,6 +402,8 @@ impl FlowImaging {
 
 impl FlowImaging {
     /// The PW lines at the gate up to the frame's time (see the module docs).
+    // The frame's context, as the two functions above take it.
+    #[allow(clippy::too_many_arguments)]
     fn spectral(
         &mut self,
         shared: &DopplerShared,
