@@ -361,9 +361,12 @@ try {
     return e && e.open && window.echothigh.state.vein === null ? e : null;
   }, null, 'an open exam case with the vein hidden');
   check('exam hides the vein state', await page.isDisabled('#vein'));
-  const selects = await page.$$('#exam-sites select');
-  check('the protocol checklist has a call per site', opened.sites.length === 3 && selects.length === 3 &&
-    opened.last === null, opened.sites.map((x) => x.name).join(', '));
+  const selects = await page.$$('#exam-sites select[data-site]');
+  const dopplerSelects = await page.$$('#exam-sites select[data-doppler]');
+  check('the protocol checklist has a call per site, and a Doppler call per Doppler site',
+    opened.sites.length === 3 && selects.length === 3 && dopplerSelects.length === opened.doppler.length &&
+      opened.doppler.length === 2 && opened.last === null,
+    `${opened.sites.map((x) => x.name).join(', ')}; Doppler at ${opened.doppler.map((x) => x.name).join(', ')}`);
   await until(page, () => window.echothigh.state.section !== null, null, 'a reading of the imaged section');
   await page.mouse.move(start.x, start.y);
   await page.mouse.down();
