@@ -154,9 +154,22 @@ const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
   const state = [], image = [], stale = [];
   const misses = []; // what a command without its effect left, for the JSON
   let missed = 0;
+  // The forces of the last 400 ms of states (the settling pause): a press's
+  // effect is measured from their least, a release's from their most, so
+  // that one state whose force reads 0 (seen once at physics 39 Hz of 100,
+  // the buffer model faded while starved) does not make a release's 0.5 N
+  // fall impossible.
+  const recent = [];
+  const onRecent = (kind, now, d) => {
+    if (kind !== 'state') return;
+    recent.push([now, force(d)]);
+    while (recent.length && recent[0][0] < now - 400) recent.shift();
+  };
+  L.listeners.push(onRecent);
   for (let i = 0; i < n; i++) {
     const depth = i % 2 === 0 ? 0.016 : 0.008;
-    const f0 = force(L.state);
+    const settled = recent.length ? recent.map((r) => r[1]) : [force(L.state)];
+    const f0 = depth > 0.012 ? Math.min(...settled) : Math.max(...settled);
     const sim0 = L.state.time;
     const up = depth > 0.012;
     const r = await new Promise((resolve) => {
@@ -191,6 +204,7 @@ const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
   }
   run = false;
   L.listeners.splice(L.listeners.indexOf(onImage), 1);
+  L.listeners.splice(L.listeners.indexOf(onRecent), 1);
   const imageIntervals = imageAt.slice(1).map((t, i) => t - imageAt[i]);
   const secs = (performance.now() - t00) / 1000;
   const q = (a, p) => { const s = [...a].sort((x, y) => x - y); return s.length ? s[Math.min(s.length - 1, Math.floor(p * s.length))] : null; };
