@@ -171,6 +171,7 @@ const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
     const settled = recent.length ? recent.map((r) => r[1]) : [force(L.state)];
     const f0 = depth > 0.012 ? Math.min(...settled) : Math.max(...settled);
     const sim0 = L.state.time;
+    const dev0 = L.state.device;
     const up = depth > 0.012;
     const r = await new Promise((resolve) => {
       let at = null, simTime = null, staleImages = 0;
@@ -179,7 +180,12 @@ const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
       const fn = (kind, now, d) => {
         if (kind === 'state' && at === null) {
           const f = force(d);
-          if (up ? f > f0 + 0.5 : f < f0 - 0.5) {
+          // The command's effect: the tissue force moved 0.5 N its way, or
+          // the device moved 4 mm (half the 8 mm step) from where it was
+          // (the haptic tick's response, which a transient of the tissue
+          // force, as seen once at 10 N, does not hide).
+          const moved = Math.hypot(...d.device.map((x, k) => x - dev0[k]));
+          if ((up ? f > f0 + 0.5 : f < f0 - 0.5) || moved > 0.004) {
             at = now; simTime = d.time;
             clearTimeout(timer);
             timer = setTimeout(() => done(null), IMAGE_WAIT);
