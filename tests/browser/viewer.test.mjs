@@ -269,6 +269,29 @@ try {
   });
   check('image canvas draws non-blank pixels', echoStats.mean > 2 && echoStats.std > 2 && echo.width > 1,
     `${echo.width}×${echo.height}, mean ${echoStats.mean.toFixed(1)}, std ${echoStats.std.toFixed(1)}`);
+  // The depth scale (issue 21): the image's depth reaches the page (the
+  // drawn section's, else the hello's field of view) and a tick marks each
+  // whole centimetre at the right edge: at row 10·k mm × rows / depth, the
+  // tick's 8 px (drawn #d8d8d8, gray 216) are light. A light speckle pixel
+  // could pass one, so all of them in every tick must be.
+  const scale = await page.evaluate(() => {
+    const sec = window.echothigh.state && window.echothigh.state.section;
+    const hello = window.echothigh.hello;
+    const depth = sec && sec.image_depth > 0 ? sec.image_depth : hello && hello.image ? hello.image.depth : 0;
+    const c = document.getElementById('echo');
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    const ticks = [];
+    for (let cm = 1; cm * 10 < depth * 1000 - 0.5; cm++) {
+      const y = Math.round(cm * 10 * c.height / (depth * 1000));
+      let lo = 255;
+      for (let x = c.width - 8; x < c.width; x++) lo = Math.min(lo, d[4 * (y * c.width + x)]);
+      ticks.push(lo);
+    }
+    return { depth, ticks };
+  });
+  check('depth scale: the image depth is known and every centimetre is ticked',
+    scale.depth > 0.01 && scale.ticks.length >= 1 && scale.ticks.every((g) => g >= 200),
+    `depth ${(scale.depth * 1000).toFixed(0)} mm, tick grays ${scale.ticks.join(' ')}`);
   await page.screenshot({ path: join(shots, '01-loaded.png') });
 
   // Start from rest (the server may have been used before), then drag the
@@ -432,18 +455,31 @@ try {
       const el = document.getElementById(id);
       const r = el.getBoundingClientRect();
       const hit = document.elementFromPoint(r.left + r.width / 2, r.top + r.height / 2);
-      return { id, left: r.left, top: r.top, right: r.right, bottom: r.bottom,
+      // A canvas drawn with object-fit: contain shows its pixels at the
+      // smaller of the two scales; the image's drawn height (CSS px).
+      const drawnH = el.tagName === 'CANVAS' && el.width > 0 && el.height > 0
+        ? Math.min(r.width / el.width, r.height / el.height) * el.height : r.height;
+      return { id, left: r.left, top: r.top, right: r.right, bottom: r.bottom, drawnH,
         visible: !!hit && el.contains(hit), on: hit ? hit.id || hit.tagName : null, disabled: !!el.disabled };
     }), ['scene', 'echo', 'gauge', 'exam-sites', 'exam-finish']);
     const vp = { width, height };
     // Every box has a size (a collapsed canvas would be "inside" trivially)
     // and lies within [0, width] × [0, height] of the viewport (CSS pixels).
+    // The image is the exam's instrument, so it must be drawn large enough
+    // to judge coaptation: the criterion's residual lumen (10 % of a femoral
+    // vein of ~10 mm, so ~1 mm) must span 3 CSS px or more (wall, gap, wall
+    // told apart) on the default 60 mm image, i.e. ≥ 180 px of drawn height;
+    // at 1280×800 we ask 4 px/mm (240 px). The previous layout drew it 85 px
+    // tall at 1280×800 (the Doppler controls and the force panel took the
+    // column), a regression this check would have caught.
+    const minImage = width >= 1280 ? 240 : 180;
     const bad = boxes.filter((b) => !(b.left >= 0 && b.top >= 0 && b.right <= vp.width && b.bottom <= vp.height &&
-      b.right - b.left >= 20 && b.bottom - b.top >= 20 && b.visible));
+      b.right - b.left >= 20 && b.bottom - b.top >= 20 && b.visible && (b.id !== 'echo' || b.drawnH >= minImage)));
     await page.screenshot({ path: join(shots, `05-layout-${width}x${height}.png`) });
     const fmt = (b) => `${b.id} [${b.left.toFixed(0)},${b.top.toFixed(0)}]–[${b.right.toFixed(0)},${b.bottom.toFixed(0)}]` +
+      (b.id === 'echo' ? ` drawn ${b.drawnH.toFixed(0)} px tall (≥ ${minImage})` : '') +
       (b.visible ? '' : ` hidden under ${b.on}`);
-    check(`layout ${width}×${height}: 3D view, image, gauge, checklist and finish button all inside the viewport`,
+    check(`layout ${width}×${height}: 3D view, image (large enough), gauge, checklist and finish button all inside the viewport`,
       bad.length === 0 && boxes.every((b) => b.id !== 'exam-finish' || !b.disabled),
       (bad.length ? bad : boxes).map(fmt).join('; '));
   }

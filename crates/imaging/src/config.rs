@@ -57,6 +57,11 @@ pub struct ImagingConfig {
     /// Imaged depth below the probe face (m). Default 0.060.
     /// Accepted: in 0.01 to 0.2 m (a thigh is imaged to 4-10 cm).
     pub depth: f64,
+    /// On a patient's leg, the live image's depth follows the level as a
+    /// sonographer sets it: each section's studied vein's far wall at ¾ of
+    /// the image, in whole centimetres (`echothigh_runtime::image_depth`).
+    /// `false` keeps `depth` everywhere. Default true.
+    pub auto_depth: bool,
     /// Centre frequency of the pulse (Hz). Default 7.5e6.
     /// Accepted: in 1e6 to 2e7 Hz (clinical B-mode probes).
     pub center_frequency: f64,
@@ -115,6 +120,7 @@ impl Default for ImagingConfig {
             live_rows: 384,
             width: 0.040,
             depth: 0.060,
+            auto_depth: true,
             center_frequency: 7.5e6,
             sound_speed: 1540.0,
             tgc_attenuation: 0.65,

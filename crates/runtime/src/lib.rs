@@ -15,6 +15,7 @@ pub mod exam_script;
 pub mod exam_site;
 mod exam_walk;
 pub mod haptic_side;
+pub mod image_depth;
 pub mod integrity;
 pub mod live;
 pub mod live_doppler;

@@ -64,6 +64,10 @@ pub struct SectionReading {
     pub frame: u64,
     /// Simulated time of the physics state the frame shows (s).
     pub time: f64,
+    /// The depth the frame was drawn to (m): its rows span it (the depth
+    /// follows the level, `crate::image_depth`).
+    #[serde(default)]
+    pub image_depth: f64,
 }
 
 impl SectionReading {
@@ -74,6 +78,7 @@ impl SectionReading {
             vein_lumen_ratio: finite(self.vein_lumen_ratio),
             artery_lumen_ratio: finite(self.artery_lumen_ratio),
             time: finite(self.time),
+            image_depth: finite(self.image_depth),
             ..*self
         }
     }
@@ -374,10 +379,45 @@ pub struct ImageInfo {
     pub time: f64,
 }
 
+/// The echographic image's field of view (m): what its columns and rows
+/// span, for the page's depth scale. It changes with the patient (the depth
+/// a sonographer sets for that build, `crate::image_depth`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ImageGeometry {
+    /// Lateral extent, centred on the probe (m).
+    pub width: f64,
+    /// Depth below the probe face (m).
+    pub depth: f64,
+}
+
+impl Default for ImageGeometry {
+    /// `ImagingConfig::default()`'s 40 mm × 60 mm.
+    fn default() -> Self {
+        ImageGeometry {
+            width: 0.040,
+            depth: 0.060,
+        }
+    }
+}
+
+impl ImageGeometry {
+    /// The field of view of `cfg`.
+    pub fn of(cfg: &echothigh_imaging::ImagingConfig) -> Self {
+        ImageGeometry {
+            width: cfg.width,
+            depth: cfg.depth,
+        }
+    }
+}
+
 /// What the runtime offers a live front end.
 pub trait LiveControl: Send + Sync {
     /// The mesh topology (static).
     fn mesh(&self) -> LiveMesh;
+    /// The image's field of view (m) for the current leg.
+    fn image_geometry(&self) -> ImageGeometry {
+        ImageGeometry::default()
+    }
     /// Copies the latest state into `out`.
     fn snapshot(&self, out: &mut LiveSnapshot);
     /// Copies the latest echographic frame (8-bit grayscale, row-major,

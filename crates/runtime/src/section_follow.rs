@@ -183,6 +183,11 @@ impl SectionImager {
                 Err(e) => return Ok(Outcome::Undrawable(format!("{e:#}"))),
             },
         };
+        if cfg.auto_depth {
+            // The depth a sonographer sets at this level (issue 21): the
+            // studied vein's far wall at ¾ of the image, in whole cm.
+            c.depth = crate::image_depth::section_depth(&c.anatomy)?;
+        }
         let window = MaterialWindow {
             lateral: material_lateral(leg_anatomy, pose),
             elevation: pose.s,

@@ -215,7 +215,7 @@ fn live_image_at(
     cfg: &ImagingConfig,
     site: Site,
     ids: &[StructureId],
-) -> (Vec<u8>, Section) {
+) -> (Vec<u8>, Section, ImagingConfig) {
     let pose = leg.anatomy().site_pose(site);
     let section = leg.anatomy().section(&pose).unwrap();
     // The page's angle is −θ_leg, its z the model height (z = centre_s − s).
@@ -231,6 +231,7 @@ fn live_image_at(
     let mut snap = LiveSnapshot::default();
     let mut img = Vec::new();
     let mut last = Vec::new();
+    let mut drawn = cfg.clone();
     wait_until(
         &format!("the section at {site:?} in the live image"),
         || {
@@ -238,15 +239,24 @@ fn live_image_at(
             assert_eq!(snap.fault, None, "at {site:?}");
             let info = system.image(&mut img);
             let (cols, rows) = (info.width as usize, info.height as usize);
+            // The frame's own depth (it follows the level, issue 21): the
+            // reading of the same frame carries it.
+            let Some(reading) = snap.status.section.filter(|r| r.frame == info.frame) else {
+                return false;
+            };
+            drawn.depth = reading.image_depth;
             last = ids
                 .iter()
-                .map(|id| darkness(&img, cols, rows, cfg, &section.get(*id).unwrap().ellipse))
+                .map(|id| darkness(&img, cols, rows, &drawn, &section.get(*id).unwrap().ellipse))
                 .collect();
             last.iter().all(|&db| db >= 13.0)
         },
     );
-    println!("{site:?}: {ids:?} darker by {last:?} dB");
-    (img, section)
+    println!(
+        "{site:?}: {ids:?} darker by {last:?} dB (image depth {:.0} mm)",
+        drawn.depth * 1e3
+    );
+    (img, section, drawn)
 }
 
 #[test]
@@ -272,7 +282,7 @@ fn the_live_image_shows_the_section_under_the_probe_at_two_sites() {
     // The image changed with the site: the other site's artery's place is
     // not a lumen (< 6 dB, under half the lumen level) where this section
     // has no vessel within the two ellipses' reach.
-    for ((img, section), (_, other), artery) in
+    for ((img, section, drawn), (_, other, _), artery) in
         [(&cfv, &fv, StructureId::Fa), (&fv, &cfv, StructureId::Cfa)]
     {
         let e = other.get(artery).unwrap().ellipse;
@@ -286,7 +296,7 @@ fn the_live_image_shows_the_section_under_the_probe_at_two_sites() {
                     > e.radii[0].max(e.radii[1]) + f.radii[0].max(f.radii[1])
             });
         if clear {
-            let db = darkness(img, cols, rows, &cfg, &e);
+            let db = darkness(img, cols, rows, drawn, &e);
             assert!(
                 db < 6.0,
                 "a lumen at {}'s place ({db:.1} dB)",
@@ -294,6 +304,28 @@ fn the_live_image_shows_the_section_under_the_probe_at_two_sites() {
             );
         }
     }
+    // The depth follows the level (issue 21): each studied vein lies in the
+    // top ¾ of its own frame (the depth knob's rule, `image_depth`, on the
+    // area-equivalent circle the renderer draws), and the
+    // groin's CFV (22 mm to its far wall on this lean leg) is drawn to a
+    // shallower depth than the mid-thigh FV (37 mm).
+    for ((_, section, drawn), id) in [(&cfv, StructureId::Cfv), (&fv, StructureId::Fv)] {
+        let e = section.get(id).unwrap().ellipse;
+        let far = e.depth + (e.radii[0] * e.radii[1]).sqrt();
+        assert!(
+            far <= 0.75 * drawn.depth,
+            "{}: far edge {:.1} mm in a {:.0} mm image",
+            id.as_str(),
+            far * 1e3,
+            drawn.depth * 1e3
+        );
+    }
+    assert!(
+        cfv.2.depth < fv.2.depth,
+        "CFV drawn to {} m, FV to {} m",
+        cfv.2.depth,
+        fv.2.depth
+    );
     let mut snap = LiveSnapshot::default();
     system.snapshot(&mut snap);
     assert_eq!(snap.fault, None);

@@ -319,6 +319,7 @@ fn reading(case: &Case, z: f64, f: f64, time: f64) -> SectionReading {
         walls_met: ratio < COAPTED_RATIO,
         frame: 0,
         time,
+        image_depth: 0.060,
     }
 }
 

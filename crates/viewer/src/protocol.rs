@@ -66,6 +66,9 @@ pub enum ServerMessage {
         mesh: LiveMesh,
         /// Rate at which state is pushed (Hz).
         state_rate: f64,
+        /// The image's field of view (m), for the depth scale drawn on it.
+        #[serde(default)]
+        image: echothigh_runtime::live::ImageGeometry,
     },
     /// Latest live state (the surface geometry follows as a binary frame).
     State(ViewState),

@@ -508,6 +508,7 @@ async fn session(mut socket: WebSocket, app: Arc<AppState>) {
     let hello = ServerMessage::Hello {
         mesh: app.control.mesh(),
         state_rate: app.config.state_rate,
+        image: app.control.image_geometry(),
     };
     if socket.send(json(hello)).await.is_err() {
         return;
@@ -575,6 +576,7 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
         let hello = json(ServerMessage::Hello {
             mesh: app.control.mesh(),
             state_rate: app.config.state_rate,
+            image: app.control.image_geometry(),
         });
         conn.budget.spend(hello.to_text().map_or(0, str::len));
         out.push(hello);

@@ -214,6 +214,7 @@ impl LiveSystem {
                 height: img.rows as u32,
                 frame: 0,
                 time: 0.0,
+                field: crate::live::ImageGeometry::of(&img),
             }),
             vein: AtomicU8::new(vein_code(scenario.patient.vein)),
             haptic: Mutex::new(None),
@@ -368,6 +369,9 @@ impl LiveSystem {
         if let Ok(mut m) = self.shared.mesh.lock() {
             *m = live_mesh(&physics);
         }
+        if let Ok(mut slot) = self.shared.image.lock() {
+            slot.field = crate::live::ImageGeometry::of(&scenario.live_imaging_config());
+        }
         self.shared.vein.store(
             vein_code(echothigh_imaging::VeinState::Healthy),
             Ordering::Relaxed,
@@ -432,6 +436,13 @@ impl LiveControl for LiveSystem {
         match self.shared.mesh.lock() {
             Ok(m) => m.clone(),
             Err(e) => e.into_inner().clone(),
+        }
+    }
+
+    fn image_geometry(&self) -> crate::live::ImageGeometry {
+        match self.shared.image.lock() {
+            Ok(s) => s.field,
+            Err(e) => e.into_inner().field,
         }
     }
 

@@ -258,6 +258,7 @@ fn imaging_loop(
         renderer
             .render_into(&frame, &mut pixels)
             .map_err(|e| anyhow::anyhow!("imaging: rendering a frame: {e}"))?;
+        let drawn_depth = renderer.config().depth;
         let lumens = renderer
             .lumens(&frame)
             .map_err(|e| anyhow::anyhow!("imaging: the frame's lumens: {e}"))?;
@@ -282,6 +283,7 @@ fn imaging_loop(
             slot.overlay.clone_from(&overlay);
             slot.frame += 1;
             slot.time = input.time;
+            slot.field.depth = drawn_depth;
             slot.frame
         };
         reading.write(lumens.map(|l| {
@@ -294,6 +296,7 @@ fn imaging_loop(
                 walls_met: vein_lumen_ratio < COAPTED_RATIO,
                 frame: frame_no,
                 time: input.time,
+                image_depth: drawn_depth,
             }
         }));
         next += period;
@@ -342,6 +345,7 @@ mod tests {
                 height: 0,
                 frame: 0,
                 time: 0.0,
+                field: crate::live::ImageGeometry::default(),
             }),
             vein: AtomicU8::new(0),
             haptic: Mutex::new(None),

@@ -67,6 +67,8 @@ pub(super) struct ImageSlot {
     pub frame: u64,
     /// Simulated time of the physics state the frame shows (s).
     pub time: f64,
+    /// The field of view the frames span (m), set with the leg.
+    pub field: crate::live::ImageGeometry,
 }
 
 /// What the threads share (the real-time side only `try_lock`s).

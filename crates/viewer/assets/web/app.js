@@ -3,7 +3,7 @@
 // server's `view/protocol.rs` (JSON envelopes {v, type, ...}; binary frames
 // with a 16-byte header "ETHV", version, kind, a, b).
 import { ThighScene } from './scene.js';
-import { EchoView, ForcePlot, Gauge, norm, showStatus } from './panels.js';
+import { EchoView, ForcePlot, Gauge, drawDepthScale, norm, showStatus } from './panels.js';
 import { showExam } from './exam.js';
 import { Guide } from './guide.js';
 import { setupDoppler } from './doppler.js';
@@ -159,8 +159,22 @@ function showSurface() {
   if (scene) scene.updateSurface(surface.pos, surface.comp);
   live.surfaceFrames += 1;
 }
+/**
+ * Over the image: the depth scale (cm), then the Doppler gate. The depth is
+ * the drawn section's (it follows the level on a patient's leg), else the
+ * hello's field of view.
+ */
+function imageDepth() {
+  const sec = live.state && live.state.section;
+  if (sec && sec.image_depth > 0) return sec.image_depth;
+  return live.hello && live.hello.image ? live.hello.image.depth : 0;
+}
+function decorateEcho(ctx, w, h) {
+  drawDepthScale(ctx, w, h, imageDepth());
+  doppler.decorate(ctx, w, h);
+}
 function showImage(w, h, px, time, overlay = null) {
-  echo.draw(w, h, px, overlay, doppler.palette(), doppler.decorate);
+  echo.draw(w, h, px, overlay, doppler.palette(), decorateEcho);
   live.imageFrames += 1;
   live.imageTime = time;
   stamp(live.arrivals.image);

@@ -194,7 +194,9 @@ export function setupDoppler($, send) {
   d.update = (s) => {
     d.status = s || null;
     $('doppler-controls').hidden = !s || !s.available;
+    $('manoeuvres').hidden = !s || !s.available;
     if (!s) return;
+    $('spectral-controls').hidden = s.mode !== 'spectral';
     for (const r of radios) if (document.activeElement !== r) r.checked = r.value === s.mode;
     $('spectrum-box').hidden = s.mode !== 'spectral';
     const scale = s.mode === 'color' || s.mode === 'power'

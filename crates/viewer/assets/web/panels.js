@@ -46,6 +46,28 @@ export class EchoView {
   }
 }
 
+/**
+ * The depth scale a scanner draws beside its image (issue 21): a tick every
+ * 5 mm, a longer one with its label every centimetre, along the right edge.
+ * `depth` is the image's depth (m) from the server's hello; `h` rows span
+ * it. Drawn in image pixels, so it scales with the image.
+ */
+export function drawDepthScale(ctx, w, h, depth) {
+  if (!(depth > 0)) return;
+  const rowsPerMm = h / (depth * 1000);
+  ctx.save();
+  ctx.strokeStyle = '#d8d8d8'; ctx.fillStyle = '#d8d8d8'; ctx.lineWidth = 1;
+  ctx.font = `${Math.max(10, Math.round(h / 28))}px system-ui, sans-serif`;
+  ctx.textAlign = 'right'; ctx.textBaseline = 'middle';
+  for (let mm = 5; mm < depth * 1000 - 0.5; mm += 5) {
+    const y = Math.round(mm * rowsPerMm) + 0.5;
+    const cm = mm % 10 === 0;
+    ctx.beginPath(); ctx.moveTo(w, y); ctx.lineTo(w - (cm ? 8 : 4), y); ctx.stroke();
+    if (cm) ctx.fillText(String(mm / 10), w - 10, y);
+  }
+  ctx.restore();
+}
+
 /** The force the trainee would feel, against the device limit. */
 export class Gauge {
   constructor(fill, limit, value) {

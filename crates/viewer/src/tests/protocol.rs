@@ -115,13 +115,22 @@ fn hello_and_error_round_trip() {
     let hello = Envelope::new(ServerMessage::Hello {
         mesh,
         state_rate: 40.0,
+        image: echothigh_runtime::live::ImageGeometry {
+            width: 0.04,
+            depth: 0.08,
+        },
     });
     let back: Envelope = serde_json::from_str(&serde_json::to_string(&hello).unwrap()).unwrap();
     match back.body {
-        ServerMessage::Hello { mesh, state_rate } => {
+        ServerMessage::Hello {
+            mesh,
+            state_rate,
+            image,
+        } => {
             assert_eq!(mesh.rest.len(), 3);
             assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
             assert_eq!(state_rate, 40.0);
+            assert_eq!((image.width, image.depth), (0.04, 0.08));
         }
         other => panic!("decoded {other:?}"),
     }
@@ -191,6 +200,7 @@ fn sanitized_zeroes_every_non_finite_number_and_keeps_the_rest() {
             walls_met: false,
             frame: 7,
             time: f64::NEG_INFINITY,
+            image_depth: 0.060,
         }),
     };
     let expected = LiveStatus {
@@ -220,6 +230,7 @@ fn sanitized_zeroes_every_non_finite_number_and_keeps_the_rest() {
             walls_met: false,
             frame: 7,
             time: 0.0,
+            image_depth: 0.060,
         }),
     };
     assert_eq!(status.sanitized(), expected);
@@ -240,6 +251,7 @@ fn the_state_carries_the_section_reading() {
         walls_met: true,
         frame: 12,
         time: 3.5,
+        image_depth: 0.060,
     });
     let state = ViewState::from_snapshot(&snap, None, None);
     let j = serde_json::to_value(ServerMessage::State(state)).unwrap();

@@ -151,7 +151,9 @@ async fn hello_then_state_surface_and_image_frames() {
         .unwrap()
         .body
     {
-        ServerMessage::Hello { mesh, state_rate } => {
+        ServerMessage::Hello {
+            mesh, state_rate, ..
+        } => {
             assert_eq!(mesh.rest.len(), nodes);
             assert!(!mesh.triangles.is_empty());
             assert_eq!(state_rate, 100.0);
