@@ -17,6 +17,7 @@ mod exam_walk;
 pub mod haptic_side;
 pub mod integrity;
 pub mod live;
+pub mod live_device;
 pub mod live_system;
 pub mod physics_loop;
 pub mod physics_side;

@@ -17,11 +17,17 @@
 //! thrombus segments; the imaging thread publishes, with each frame, a
 //! reading of the section under the probe ([`crate::live::SectionReading`]).
 
+mod device_status;
+mod hardware_loop;
 mod imaging_source;
 mod publish;
 mod session;
 mod shared;
 
+pub use device_status::device_drives_message;
+pub use hardware_loop::{DeviceLoop, SkinNormal};
+
+use crate::live_device::{LiveDevice, LiveDeviceInfo};
 use crate::live::{
     CommandLimits, CouplingMode, ImageInfo, LiveCommand, LiveControl, LiveMesh, LiveSnapshot,
     VeinState,
@@ -106,6 +112,8 @@ pub struct LiveSystem {
     inner: Mutex<Inner>,
     settings: Mutex<Settings>,
     imaging: Mutex<Option<ImagingThread>>,
+    /// The real device driving the probe, when one is attached (issue 15).
+    device_info: Option<LiveDeviceInfo>,
 }
 
 /// The hand target for a probe placed at `theta` (rad, 0 = top, positive
@@ -177,6 +185,23 @@ impl LiveSystem {
     /// thrombus segments ([`LiveSystem::set_case`]), or on the scenario's
     /// own leg for `None`.
     pub fn start_with_case(scenario: Scenario, case: Option<&Case>) -> Result<Arc<Self>> {
+        Self::start_with_device(scenario, case, None)
+    }
+
+    /// [`LiveSystem::start_with_case`] with `device` (issue 15), when given,
+    /// driving the probe instead of the page: the one haptic tick reads it
+    /// (calibrated into the thigh frame by its opener), the page's probe
+    /// commands are refused while it is attached, and each snapshot carries
+    /// its state ([`LiveSnapshot::haptic_device`]).
+    pub fn start_with_device(
+        scenario: Scenario,
+        case: Option<&Case>,
+        device: Option<LiveDevice>,
+    ) -> Result<Arc<Self>> {
+        let (hardware, device_info) = match device {
+            Some(d) => (Some(d.device), Some(d.info)),
+            None => (None, None),
+        };
         let base_thigh = scenario.thigh.clone();
         let mut scenario = scenario;
         if let Some(c) = case {
@@ -213,6 +238,7 @@ impl LiveSystem {
             section: Mutex::new(None),
             watchers: AtomicUsize::new(0),
             fault: Mutex::new(None),
+            device: Mutex::new(None),
         });
         let leg = physics.model().mesh().leg().cloned();
         let target = target_on_surface(&scenario, leg.as_ref(), 0.0, 0.0, LIFTED_DEPTH, 0.0)
@@ -238,13 +264,18 @@ impl LiveSystem {
             settings: Mutex::new(Settings::of(&inner)),
             inner: Mutex::new(inner),
             imaging: Mutex::new(Some(imaging)),
+            device_info,
         });
         {
             let mut inner = system
                 .inner
                 .lock()
                 .map_err(|_| anyhow::anyhow!("live state poisoned"))?;
-            system.restart(&mut inner, Keep::Nothing)?;
+            let carried = Carried {
+                hardware,
+                ..Carried::default()
+            };
+            system.start_from(&mut inner, carried, true)?;
         }
         Ok(system)
     }
@@ -261,7 +292,13 @@ impl LiveSystem {
     fn restart(&self, inner: &mut Inner, keep: Keep) -> Result<()> {
         let mut carried = inner.session.take().map(Session::stop).unwrap_or_default();
         match keep {
-            Keep::Nothing => carried = Carried::default(),
+            // A real device stays attached whatever restarts.
+            Keep::Nothing => {
+                carried = Carried {
+                    hardware: carried.hardware.take(),
+                    ..Carried::default()
+                }
+            }
             Keep::Thigh => carried.device = None,
             Keep::ThighAndProbe => {}
         }
@@ -270,6 +307,13 @@ impl LiveSystem {
 
     /// Starts a session from `carried` (the thigh at rest when `at_rest`).
     fn start_from(&self, inner: &mut Inner, carried: Carried, at_rest: bool) -> Result<()> {
+        if let (Some(info), None) = (&self.device_info, &carried.hardware) {
+            anyhow::bail!(
+                "the haptic device ({}) was released when its haptic thread stopped abnormally: \
+                 restart echothigh to drive it again",
+                info.name
+            );
+        }
         if let Ok(mut f) = self.shared.fault.lock() {
             *f = None;
         }
@@ -292,6 +336,7 @@ impl LiveSystem {
             inner.exam,
             inner.target,
             carried,
+            self.device_info.as_ref().map_or("", |i| i.name.as_str()),
         )?);
         Ok(())
     }
@@ -351,9 +396,7 @@ impl LiveSystem {
                 tracing::warn!("the imaging thread of the previous case: {e:#}");
             }
         }
-        if let Some(s) = inner.session.take() {
-            s.stop();
-        }
+        let hardware = inner.session.take().and_then(|s| s.stop().hardware);
         if let Ok(mut m) = self.shared.mesh.lock() {
             *m = live_mesh(&physics);
         }
@@ -369,6 +412,7 @@ impl LiveSystem {
         let carried = Carried {
             physics: Some(physics),
             device: None,
+            hardware,
         };
         self.start_from(&mut inner, carried, true)?;
         let imaging = ImagingThread::spawn(
@@ -458,6 +502,7 @@ impl LiveControl for LiveSystem {
                 };
             }
         }
+        out.haptic_device = self.device_status();
         if out.status.mode == Some(CouplingMode::Direct) {
             // The physics steps in the haptic loop: its achieved rate is the
             // loop's, not the setting (issue 19: "1000 Hz" shown at 652).
@@ -491,6 +536,10 @@ impl LiveControl for LiveSystem {
         }
     }
 
+    fn driving_device(&self) -> Option<String> {
+        self.device_info.as_ref().map(|i| i.name.clone())
+    }
+
     fn page_opened(&self) {
         self.shared.watchers.fetch_add(1, Ordering::AcqRel);
         if let Ok(Some(t)) = self.imaging.lock().as_deref() {
@@ -513,6 +562,14 @@ impl LiveControl for LiveSystem {
             .map_err(|_| "live state poisoned".to_string())?;
         cmd.validate(&limits_of(&inner.scenario))
             .map_err(|e| e.to_string())?;
+        if let Some(info) = &self.device_info {
+            if matches!(
+                cmd,
+                LiveCommand::Probe { .. } | LiveCommand::Lift | LiveCommand::PlayExam
+            ) {
+                return Err(device_drives_message(&info.name));
+            }
+        }
         let applied = self.apply(&mut inner, cmd);
         self.publish_settings(&inner);
         applied

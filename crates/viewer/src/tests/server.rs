@@ -20,7 +20,7 @@ type Client =
     tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
 
 /// Starts a server on a free loopback port; returns its address.
-async fn start(fake: Arc<FakeLive>) -> std::net::SocketAddr {
+pub(super) async fn start(fake: Arc<FakeLive>) -> std::net::SocketAddr {
     start_with(fake, ServerConfig::default().idle_timeout).await
 }
 
@@ -53,7 +53,7 @@ fn practice() -> ExamSession {
     )
 }
 
-async fn connect(addr: std::net::SocketAddr) -> Client {
+pub(super) async fn connect(addr: std::net::SocketAddr) -> Client {
     let (ws, _) = tokio_tungstenite::connect_async(format!("ws://{addr}/ws"))
         .await
         .unwrap();
@@ -108,18 +108,18 @@ async fn next_json(ws: &mut Client, mut pred: impl FnMut(&ServerMessage) -> bool
     panic!("no matching message in 500");
 }
 
-async fn next_state(ws: &mut Client, mut pred: impl FnMut(&ViewState) -> bool) -> ViewState {
+pub(super) async fn next_state(ws: &mut Client, mut pred: impl FnMut(&ViewState) -> bool) -> ViewState {
     match next_json(ws, |m| matches!(m, ServerMessage::State(s) if pred(s))).await {
         ServerMessage::State(s) => s,
         _ => unreachable!(),
     }
 }
 
-async fn send(ws: &mut Client, text: &str) {
+pub(super) async fn send(ws: &mut Client, text: &str) {
     ws.send(Message::text(text)).await.unwrap();
 }
 
-async fn next_error(ws: &mut Client) -> String {
+pub(super) async fn next_error(ws: &mut Client) -> String {
     match next_json(ws, |m| matches!(m, ServerMessage::Error { .. })).await {
         ServerMessage::Error { message } => message,
         _ => unreachable!(),
