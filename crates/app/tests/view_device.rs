@@ -19,7 +19,10 @@ fn refused(args: &[&str]) {
         err.contains("libHD") && err.contains("ECHOTHIGH_HD_LIB"),
         "{args:?}: the message names neither the library nor the variable: {err}"
     );
-    assert!(!out.contains("echothigh viewer:"), "{args:?}: it served: {out}");
+    assert!(
+        !out.contains("echothigh viewer:"),
+        "{args:?}: it served: {out}"
+    );
 }
 
 #[test]
@@ -32,7 +35,18 @@ fn exam_with_a_missing_library_names_it_and_the_variable() {
     let db = std::env::temp_dir().join(format!("echothigh-view-device-{}.db", std::process::id()));
     let url = format!("sqlite://{}", db.display());
     refused(&[
-        "exam", "--trainee", "ada", "--device", "openhaptics", "--port", "0", "--db", &url,
+        "exam",
+        "--trainee",
+        "ada",
+        "--device",
+        "openhaptics",
+        "--port",
+        "0",
+        "--db",
+        &url,
     ]);
-    assert!(!db.exists(), "the records database was made before the device failed");
+    assert!(
+        !db.exists(),
+        "the records database was made before the device failed"
+    );
 }

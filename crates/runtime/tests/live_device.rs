@@ -75,14 +75,22 @@ fn snapshot(system: &LiveSystem) -> LiveSnapshot {
 }
 
 /// Polls the snapshot every 5 ms until `pred` holds (panics after `limit` s).
-fn wait_for(system: &LiveSystem, limit: f64, what: &str, pred: impl Fn(&LiveSnapshot) -> bool) -> LiveSnapshot {
+fn wait_for(
+    system: &LiveSystem,
+    limit: f64,
+    what: &str,
+    pred: impl Fn(&LiveSnapshot) -> bool,
+) -> LiveSnapshot {
     let t0 = Instant::now();
     loop {
         let s = snapshot(system);
         if pred(&s) {
             return s;
         }
-        assert!(t0.elapsed().as_secs_f64() < limit, "{what}: not within {limit} s: {s:?}");
+        assert!(
+            t0.elapsed().as_secs_f64() < limit,
+            "{what}: not within {limit} s: {s:?}"
+        );
         std::thread::sleep(Duration::from_millis(5));
     }
 }
@@ -112,14 +120,25 @@ fn the_stylus_moves_the_live_probe_along_the_mapped_axis() {
     std::thread::sleep(Duration::from_millis(500));
     let s0 = snapshot(&system);
     let d = s0.haptic_device.clone().expect("device status");
-    assert!(d.connected && !d.clutched && d.name.contains("Touch"), "{d:?}");
-    assert!(d.orientation_sensed, "the Touch's gimbal senses the orientation");
+    assert!(
+        d.connected && !d.clutched && d.name.contains("Touch"),
+        "{d:?}"
+    );
+    assert!(
+        d.orientation_sensed,
+        "the Touch's gimbal senses the orientation"
+    );
     assert_eq!(d.max_force, PEAK);
     // The home (0, 0, 0) maps to (0, 0.1, 0), inside the mapped workspace box.
     let w = d.workspace.expect("the Touch reports its workspace");
     for k in 0..3 {
-        let (lo, hi) = w.iter().fold((f64::MAX, f64::MIN), |(l, h), c| (l.min(c[k]), h.max(c[k])));
-        assert!(lo < s0.status.device[k] && s0.status.device[k] < hi, "axis {k}: {w:?}");
+        let (lo, hi) = w
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(l, h), c| (l.min(c[k]), h.max(c[k])));
+        assert!(
+            lo < s0.status.device[k] && s0.status.device[k] < hi,
+            "axis {k}: {w:?}"
+        );
     }
     // At rest at home, out of contact: the force is zero, so the stylus sits
     // at the hand's target, the device origin (0, 0.1, 0).
@@ -130,13 +149,18 @@ fn the_stylus_moves_the_live_probe_along_the_mapped_axis() {
         assert!((home[k] - want).abs() < 5e-4, "home {home:?}");
     }
     touch.hand([30.0, 0.0, 0.0], 300.0, 5.0);
-    wait_for(&system, 5.0, "moved", |s| s.status.device[2] < home[2] - 0.0295);
+    wait_for(&system, 5.0, "moved", |s| {
+        s.status.device[2] < home[2] - 0.0295
+    });
     std::thread::sleep(Duration::from_millis(300));
     let s = snapshot(&system).status.device;
     let moved = [s[0] - home[0], s[1] - home[1], s[2] - home[2]];
     // Device +x ↦ thigh −z: 30 mm along −z, nothing across (0.5 mm, as above).
     assert!((moved[2] + 0.030).abs() < 5e-4, "moved {moved:?}");
-    assert!(moved[0].abs() < 5e-4 && moved[1].abs() < 5e-4, "moved {moved:?}");
+    assert!(
+        moved[0].abs() < 5e-4 && moved[1].abs() < 5e-4,
+        "moved {moved:?}"
+    );
     // The physics steps the probe where the device is (out of contact the
     // probe's face centre is the device position; 1 mm: the physics
     // publishes every 10 ms, while the arm has stopped).
@@ -146,12 +170,20 @@ fn the_stylus_moves_the_live_probe_along_the_mapped_axis() {
     assert!((p.status.probe_position[0] - s[0]).abs() < 1e-3);
     // The page's probe commands are refused, naming the device.
     for cmd in [
-        LiveCommand::Probe { theta: 0.0, z: 0.0, depth: 0.01, tilt: 0.0 },
+        LiveCommand::Probe {
+            theta: 0.0,
+            z: 0.0,
+            depth: 0.01,
+            tilt: 0.0,
+        },
         LiveCommand::Lift,
         LiveCommand::PlayExam,
     ] {
         let e = system.command(cmd.clone()).expect_err("refused");
-        assert!(e.contains("Touch") && e.contains("drives the probe"), "{cmd:?}: {e}");
+        assert!(
+            e.contains("Touch") && e.contains("drives the probe"),
+            "{cmd:?}: {e}"
+        );
     }
     // Settings still apply: a mode change restarts the session with the device.
     system
@@ -182,15 +214,24 @@ fn pressing_in_is_pushed_out_within_limits_and_the_clutch_ramps() {
     // residual motion between the two readings.
     let y = s.status.device[1] - ORIGIN_Y;
     let balance = 300.0 * (y + 0.045);
-    assert!((f[1] - balance).abs() < 0.15, "motor {f:?} vs hand {balance}");
+    assert!(
+        (f[1] - balance).abs() < 0.15,
+        "motor {f:?} vs hand {balance}"
+    );
     // Within the device's limits the whole run (the emulator's own maximum).
-    assert!(touch.max_applied_force() <= PEAK + 1e-9, "{}", touch.max_applied_force());
+    assert!(
+        touch.max_applied_force() <= PEAK + 1e-9,
+        "{}",
+        touch.max_applied_force()
+    );
     let before = norm(f);
 
     // Clutch: the force goes to zero and stays there while held.
     touch.buttons(CLUTCH);
     wait_for(&system, 2.0, "clutched", |x| {
-        x.haptic_device.as_ref().is_some_and(|d| d.clutched && norm(d.force) == 0.0)
+        x.haptic_device
+            .as_ref()
+            .is_some_and(|d| d.clutched && norm(d.force) == 0.0)
     });
     std::thread::sleep(Duration::from_millis(20));
     for _ in 0..50 {
@@ -209,7 +250,12 @@ fn pressing_in_is_pushed_out_within_limits_and_the_clutch_ramps() {
         let (f, t) = touch.last_force();
         if t > t_release {
             let bound = PEAK * ((t - t_release + 0.005) / 0.5).min(1.0);
-            assert!(norm(f) <= bound + 1e-9, "|F| = {} N at {:.3} s after release", norm(f), t - t_release);
+            assert!(
+                norm(f) <= bound + 1e-9,
+                "|F| = {} N at {:.3} s after release",
+                norm(f),
+                t - t_release
+            );
         }
         last = norm(f);
         std::thread::sleep(Duration::from_millis(2));
@@ -218,7 +264,10 @@ fn pressing_in_is_pushed_out_within_limits_and_the_clutch_ramps() {
     assert!(!s.haptic_device.as_ref().unwrap().clutched);
     // Back in after the ramp: the stylus is pressed as before (the clutch
     // held the probe still), so the force is back near its level.
-    assert!(last > 0.5 * before, "after the ramp {last} N, before {before} N");
+    assert!(
+        last > 0.5 * before,
+        "after the ramp {last} N, before {before} N"
+    );
     assert!(touch.max_applied_force() <= PEAK + 1e-9);
     system.shutdown().expect("clean stop");
 }
@@ -238,13 +287,23 @@ fn a_device_that_vanishes_is_reported_and_released() {
     });
     let d = s.haptic_device.unwrap();
     assert_eq!(d.force, [0.0; 3]);
-    assert!(d.lost.as_deref().is_some_and(|m| m.contains("stopped answering")), "{d:?}");
+    assert!(
+        d.lost
+            .as_deref()
+            .is_some_and(|m| m.contains("stopped answering")),
+        "{d:?}"
+    );
     let s = wait_for(&system, 5.0, "fault shown", |x| x.fault.is_some());
     assert!(s.fault.unwrap().contains("Touch"));
     assert_eq!(touch.applied_force(), [0.0; 3]);
     // Still the device's page: the mouse does not take over.
     assert!(system
-        .command(LiveCommand::Probe { theta: 0.0, z: 0.0, depth: 0.01, tilt: 0.0 })
+        .command(LiveCommand::Probe {
+            theta: 0.0,
+            z: 0.0,
+            depth: 0.01,
+            tilt: 0.0
+        })
         .is_err());
     system.shutdown().expect("clean stop");
 }

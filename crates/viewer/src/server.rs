@@ -133,9 +133,9 @@ impl AppState {
                     .into(),
             ),
             // A real device drives the probe (issue 15): the page only watches it.
-            ClientMessage::Live(LiveCommand::Probe { .. } | LiveCommand::Lift | LiveCommand::PlayExam)
-                if self.control.driving_device().is_some() =>
-            {
+            ClientMessage::Live(
+                LiveCommand::Probe { .. } | LiveCommand::Lift | LiveCommand::PlayExam,
+            ) if self.control.driving_device().is_some() => {
                 let name = self.control.driving_device().unwrap_or_default();
                 Err(echothigh_runtime::live_system::device_drives_message(&name))
             }

@@ -49,5 +49,4 @@ impl LiveSystem {
     pub fn device_drives(&self) -> bool {
         self.device_info.is_some()
     }
-
 }

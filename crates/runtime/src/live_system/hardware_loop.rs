@@ -208,7 +208,10 @@ mod tests {
             let p = leg.to_model(&leg.anatomy().skin_point(sl, theta_leg).unwrap());
             let n = leg.anatomy().skin_normal(sl, theta_leg).unwrap();
             let axis = probe_axis(skin.orientation_at(p, [1.0, 0.0, 0.0, 0.0]));
-            assert!((axis - n).norm() < 1e-9, "z {z} θ {theta_leg}: {axis:?} vs {n:?}");
+            assert!(
+                (axis - n).norm() < 1e-9,
+                "z {z} θ {theta_leg}: {axis:?} vs {n:?}"
+            );
         }
     }
 

@@ -27,11 +27,11 @@ mod shared;
 pub use device_status::device_drives_message;
 pub use hardware_loop::{DeviceLoop, SkinNormal};
 
-use crate::live_device::{LiveDevice, LiveDeviceInfo};
 use crate::live::{
     CommandLimits, CouplingMode, ImageInfo, LiveCommand, LiveControl, LiveMesh, LiveSnapshot,
     VeinState,
 };
+use crate::live_device::{LiveDevice, LiveDeviceInfo};
 use crate::physics_side::PhysicsSide;
 use crate::scenario::Scenario;
 use anyhow::{Context, Result};

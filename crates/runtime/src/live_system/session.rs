@@ -132,7 +132,10 @@ pub(super) fn start_session(
         .map_err(|_| anyhow::anyhow!("live state poisoned"))? = device_out;
     let exam = exam && hardware.is_none();
     // Before any thread starts: an error here loses nothing.
-    let skin = hardware.as_ref().map(|_| SkinNormal::of(scenario)).transpose()?;
+    let skin = hardware
+        .as_ref()
+        .map(|_| SkinNormal::of(scenario))
+        .transpose()?;
     let device = if exam {
         let script = ExamScript::new(scenario.exam_script_config()?).map_err(anyhow::Error::msg)?;
         let hand = SimulatedHand::scripted(scenario.hand, script).map_err(anyhow::Error::msg)?;
@@ -229,13 +232,7 @@ pub(super) fn start_session(
     let observer = LiveObserver::new(pos_in, status_in, publisher, period);
     if let (Some(hw), Some(device_in), Some(skin)) = (hardware.take(), device_in, skin) {
         let tick = HapticTick::new(hw, source, scale, direct_physics.take(), period);
-        let device_loop = DeviceLoop::new(
-            tick,
-            observer,
-            skin,
-            device_in,
-            target.orientation,
-        );
+        let device_loop = DeviceLoop::new(tick, observer, skin, device_in, target.orientation);
         let haptic = hardware_loop::spawn(
             device_loop,
             runner,

@@ -12,7 +12,9 @@ static SERIAL: Mutex<()> = Mutex::new(());
 /// Serialises the tests of one binary (the emulator is one device,
 /// process-wide); survives a poisoned lock.
 pub fn serial() -> MutexGuard<'static, ()> {
-    SERIAL.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+    SERIAL
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
 }
 
 /// The emulator library: next to this test executable or above it, up to `target`.
@@ -53,7 +55,12 @@ impl Touch {
     fn f<T: Copy>(&self, name: &str) -> T {
         let full = format!("echothigh_emu_hd_{name}\0");
         // SAFETY: the callers give each control's exact signature.
-        unsafe { *self.lib.get::<T>(full.as_bytes()).expect("emulator control") }
+        unsafe {
+            *self
+                .lib
+                .get::<T>(full.as_bytes())
+                .expect("emulator control")
+        }
     }
 
     /// The emulated hand pulls the stylus to `target` (mm, device frame)
@@ -81,7 +88,9 @@ impl Touch {
     pub fn last_force(&self) -> ([f64; 3], f64) {
         let mut f = [0.0; 3];
         // SAFETY: (double*) -> double.
-        let t = unsafe { self.f::<unsafe extern "C" fn(*mut f64) -> f64>("last_force")(f.as_mut_ptr()) };
+        let t = unsafe {
+            self.f::<unsafe extern "C" fn(*mut f64) -> f64>("last_force")(f.as_mut_ptr())
+        };
         (f, t)
     }
 
@@ -102,7 +111,12 @@ impl Touch {
     /// The emulator's clock (s).
     pub fn now(&self) -> f64 {
         // SAFETY: () -> double.
-        unsafe { (*self.lib.get::<unsafe extern "C" fn() -> f64>(b"echothigh_emu_now\0").expect("now"))() }
+        unsafe {
+            (*self
+                .lib
+                .get::<unsafe extern "C" fn() -> f64>(b"echothigh_emu_now\0")
+                .expect("now"))()
+        }
     }
 }
 

@@ -30,7 +30,11 @@ async fn probe_commands_are_refused_while_a_device_drives() {
     let mut ws = connect(start(fake.clone()).await).await;
     let s = next_state(&mut ws, |s| s.haptic_device.is_some()).await;
     let d = s.haptic_device.unwrap();
-    assert_eq!(d, touch(), "the device's status reaches the page as the runtime gave it");
+    assert_eq!(
+        d,
+        touch(),
+        "the device's status reaches the page as the runtime gave it"
+    );
     assert!(!s.observer, "the only tab still drives the other controls");
     for cmd in [
         r#"{"type":"probe","theta":0.1,"z":0.0,"depth":0.01,"tilt":0.0}"#,

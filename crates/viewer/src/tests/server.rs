@@ -108,7 +108,10 @@ async fn next_json(ws: &mut Client, mut pred: impl FnMut(&ServerMessage) -> bool
     panic!("no matching message in 500");
 }
 
-pub(super) async fn next_state(ws: &mut Client, mut pred: impl FnMut(&ViewState) -> bool) -> ViewState {
+pub(super) async fn next_state(
+    ws: &mut Client,
+    mut pred: impl FnMut(&ViewState) -> bool,
+) -> ViewState {
     match next_json(ws, |m| matches!(m, ServerMessage::State(s) if pred(s))).await {
         ServerMessage::State(s) => s,
         _ => unreachable!(),

@@ -104,7 +104,11 @@ fn the_device_status_json_is_pinned() {
     use echothigh_runtime::live_device::LiveDeviceStatus;
     let mut corners = [[0.0; 3]; 8];
     for (i, c) in corners.iter_mut().enumerate() {
-        *c = [(i & 1) as f64 * 0.5, ((i >> 1) & 1) as f64 * 0.25, ((i >> 2) & 1) as f64 * 0.125];
+        *c = [
+            (i & 1) as f64 * 0.5,
+            ((i >> 1) & 1) as f64 * 0.25,
+            ((i >> 2) & 1) as f64 * 0.125,
+        ];
     }
     let mut state = sample_state();
     state.haptic_device = Some(LiveDeviceStatus {
@@ -133,7 +137,19 @@ fn the_device_status_json_is_pinned() {
         .find(|a| a.path == "/device.js")
         .map(|a| String::from_utf8_lossy(a.body).into_owned())
         .unwrap();
-    for key in ["name", "connected", "clutched", "force", "max_force", "orientation_sensed", "workspace", "lost"] {
-        assert!(js.contains(&format!("d.{key}")), "device.js never reads `{key}`");
+    for key in [
+        "name",
+        "connected",
+        "clutched",
+        "force",
+        "max_force",
+        "orientation_sensed",
+        "workspace",
+        "lost",
+    ] {
+        assert!(
+            js.contains(&format!("d.{key}")),
+            "device.js never reads `{key}`"
+        );
     }
 }
