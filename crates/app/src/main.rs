@@ -47,7 +47,7 @@ enum Command {
     Cases(cmd::cases::CasesCommand),
     /// The trainee's live web viewer (3D thigh, probe, image, force, exam mode).
     #[cfg(feature = "viewer")]
-    View(cmd::view::Args),
+    View(cmd::view::ViewArgs),
     /// The scripted trainee (issue 14): an exam script on a case, headless on the virtual clock, and its score.
     Exam(cmd::exam::Args),
     /// List the real haptic-device backends: SDK found, devices, limits, or why not.

@@ -7,9 +7,10 @@ use super::device_arg::DeviceArgs;
 use anyhow::Result;
 use echothigh_runtime::scenario::Scenario;
 
-/// Arguments of `echothigh view`.
+/// Arguments of `echothigh view` (named apart from the viewer's `Args`,
+/// which it flattens: clap names an argument group after its struct).
 #[derive(clap::Args, Debug)]
-pub struct Args {
+pub struct ViewArgs {
     /// The viewer's own options.
     #[command(flatten)]
     pub view: echothigh_viewer::Args,
@@ -21,7 +22,7 @@ pub struct Args {
 
 /// Runs the viewer; the device is opened first, so that a missing driver
 /// is said before the server starts.
-pub fn run(args: Args) -> Result<()> {
+pub fn run(args: ViewArgs) -> Result<()> {
     let case = args
         .view
         .case
