@@ -12,7 +12,6 @@
 
 mod emu;
 
-use echothigh_device::HapticDevice;
 use echothigh_devices_hw::{open_hardware, DeviceKind, DeviceToLeg, HardwareConfig};
 use echothigh_runtime::live::{LiveCommand, LiveControl, LiveSnapshot};
 use echothigh_runtime::live_device::{LiveDevice, LiveDeviceInfo};

@@ -85,7 +85,7 @@ fn the_device_loop_step_allocates_nothing() {
     let mut lp = DeviceLoop::new(tick, (), skin, status, [1.0, 0.0, 0.0, 0.0]);
     lp.step(0.0).unwrap(); // warm-up
     let mut t = 0.0;
-    let n = count_allocations(|| {
+    let ((), n) = count_allocations(|| {
         for _ in 0..20_000 {
             t += period;
             assert_eq!(lp.step(t).unwrap(), None);
