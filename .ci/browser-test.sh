@@ -38,30 +38,37 @@ target_dir="${CARGO_TARGET_DIR:-$root/target}"
 if [ "$profile" = dev ]; then bin="$target_dir/debug/echothigh"; else bin="$target_dir/$profile/echothigh"; fi
 
 out="$(mktemp)"
-"$bin" view --port 0 >"$out" 2>"$shots/server.log" &
-server=$!
+server=""
 cleanup() {
-  kill "$server" 2>/dev/null || true
-  wait "$server" 2>/dev/null || true
+  [ -n "$server" ] && kill "$server" 2>/dev/null || true
+  [ -n "$server" ] && wait "$server" 2>/dev/null || true
   rm -f "$out"
 }
 trap cleanup EXIT
 
-url=""
-for _ in $(seq 1 600); do
-  url="$(sed -n 's/^echothigh viewer: \(http[^ ]*\)$/\1/p' "$out" | head -n 1)"
-  [ -n "$url" ] && break
-  if ! kill -0 "$server" 2>/dev/null; then
-    echo "browser-test: echothigh view exited before serving; its log:" >&2
-    cat "$shots/server.log" >&2
-    exit 1
-  fi
-  sleep 0.1
-done
-if [ -z "$url" ]; then
-  echo "browser-test: no URL from echothigh view within 60 s" >&2
+# Starts `echothigh ARGS... --port 0` in the background (its pid in $server,
+# its stderr in $shots/LOG) and waits up to 60 s for the URL it prints (in $url).
+start_server() {
+  local name="$1" log="$2"
+  shift 2
+  "$bin" "$@" --port 0 >"$out" 2>"$shots/$log" &
+  server=$!
+  url=""
+  for _ in $(seq 1 600); do
+    url="$(sed -n 's/^echothigh viewer: \(http[^ ]*\)$/\1/p' "$out" | head -n 1)"
+    [ -n "$url" ] && return 0
+    if ! kill -0 "$server" 2>/dev/null; then
+      echo "browser-test: echothigh $name exited before serving; its log:" >&2
+      cat "$shots/$log" >&2
+      exit 1
+    fi
+    sleep 0.1
+  done
+  echo "browser-test: no URL from echothigh $name within 60 s" >&2
   exit 1
-fi
+}
+
+start_server view server.log view
 echo "browser-test: server at $url"
 
 ECHOTHIGH_URL="$url" SCREENSHOT_DIR="$shots" CHROMIUM=/usr/bin/chromium ECHOTHIGH_SERVER_PID="$server" \
@@ -74,21 +81,10 @@ mkdir "$exam_dir/cases"
 cp cases/normal-average.toml cases/popliteal-acute.toml "$exam_dir/cases/"
 db="$exam_dir/records.sqlite3"
 trainee="browser-test-$$"
-"$bin" exam --trainee "$trainee" --protocol two-point --cases "$exam_dir/cases" --db "sqlite://$db" \
-  --port 0 >"$out" 2>"$shots/exam-server.log" &
-server=$!
-url=""
-for _ in $(seq 1 600); do
-  url="$(sed -n 's/^echothigh viewer: \(http[^ ]*\)$/\1/p' "$out" | head -n 1)"
-  [ -n "$url" ] && break
-  if ! kill -0 "$server" 2>/dev/null; then
-    echo "browser-test: echothigh exam exited before serving; its log:" >&2
-    cat "$shots/exam-server.log" >&2
-    exit 1
-  fi
-  sleep 0.1
-done
-[ -n "$url" ] || { echo "browser-test: no URL from echothigh exam within 60 s" >&2; exit 1; }
+kill "$server" 2>/dev/null || true
+wait "$server" 2>/dev/null || true
+start_server exam exam-server.log exam --trainee "$trainee" --protocol two-point --cases "$exam_dir/cases" \
+  --db "sqlite://$db"
 echo "browser-test: exam server at $url"
 ECHOTHIGH_URL="$url" ECHOTHIGH_TRAINEE="$trainee" SCREENSHOT_DIR="$shots" CHROMIUM=/usr/bin/chromium \
   node tests/browser/exam.test.mjs

@@ -78,7 +78,8 @@ const findThigh = () => {
     for (let fx = 0.3; fx <= 0.7; fx += 0.02) {
       const x = r.left + fx * r.width, y = r.top + fy * r.height;
       const hit = scene.pick(x, y);
-      if (hit && Math.abs(hit.theta) < 0.6) {
+      // The point must reach the canvas (not the guide's card over the view).
+      if (hit && Math.abs(hit.theta) < 0.6 && document.elementFromPoint(x, y) === scene.canvas) {
         const score = Math.abs(hit.z) + Math.abs(hit.theta) * 0.05;
         if (!best || score < best.score) best = { x, y, score, hit };
       }
@@ -122,7 +123,14 @@ const THROTTLE = 2;
 const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
   const MAX_STALE_IMAGES = maxStale; // the module's constant, passed into the page
   const L = window.echothigh;
-  const TIMEOUT = 3000; // ms, for the state; a miss is counted as this long
+  // A command misses when its effect is not in the state once the
+  // simulation, as the page sees it, has run SIM_TIMEOUT past the command: a
+  // backlog of stale states (issue 19: 4–6 s) misses, while a machine that
+  // starves the physics (its simulated time then runs slower than the wall
+  // clock) only delays the effect. WALL_TIMEOUT ends a stalled stream.
+  const SIM_TIMEOUT = 3; // s of simulated time
+  const WALL_TIMEOUT = 30000; // ms
+  const TIMEOUT = 3000; // ms, the state lag a miss is counted as
   // Once the state shows the effect, how long to wait for the image before
   // giving up on it (it only stops a stuck stream from hanging the test; the
   // image's criterion is the count of stale images, see the checks).
@@ -146,9 +154,24 @@ const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
   const state = [], image = [], stale = [];
   const misses = []; // what a command without its effect left, for the JSON
   let missed = 0;
+  // The forces of the last 400 ms of states (the settling pause): a press's
+  // effect is measured from their least, a release's from their most, so
+  // that one state whose force reads 0 (seen once at physics 39 Hz of 100,
+  // the buffer model faded while starved) does not make a release's 0.5 N
+  // fall impossible.
+  const recent = [];
+  const onRecent = (kind, now, d) => {
+    if (kind !== 'state') return;
+    recent.push([now, force(d)]);
+    while (recent.length && recent[0][0] < now - 400) recent.shift();
+  };
+  L.listeners.push(onRecent);
   for (let i = 0; i < n; i++) {
     const depth = i % 2 === 0 ? 0.016 : 0.008;
-    const f0 = force(L.state);
+    const settled = recent.length ? recent.map((r) => r[1]) : [force(L.state)];
+    const f0 = depth > 0.012 ? Math.min(...settled) : Math.max(...settled);
+    const sim0 = L.state.time;
+    const dev0 = L.state.device;
     const up = depth > 0.012;
     const r = await new Promise((resolve) => {
       let at = null, simTime = null, staleImages = 0;
@@ -157,17 +180,22 @@ const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
       const fn = (kind, now, d) => {
         if (kind === 'state' && at === null) {
           const f = force(d);
-          if (up ? f > f0 + 0.5 : f < f0 - 0.5) {
+          // The command's effect: the tissue force moved 0.5 N its way, or
+          // the device moved 4 mm (half the 8 mm step) from where it was
+          // (the haptic tick's response, which a transient of the tissue
+          // force, as seen once at 10 N, does not hide).
+          const moved = Math.hypot(...d.device.map((x, k) => x - dev0[k]));
+          if ((up ? f > f0 + 0.5 : f < f0 - 0.5) || moved > 0.004) {
             at = now; simTime = d.time;
             clearTimeout(timer);
             timer = setTimeout(() => done(null), IMAGE_WAIT);
-          }
+          } else if (d.time > sim0 + SIM_TIMEOUT) done(null);
         } else if (kind === 'image' && at !== null && d !== null) {
           if (d >= simTime) done({ state: at - t0, image: now - t0, stale: staleImages });
           else staleImages++;
         }
       };
-      timer = setTimeout(() => done(null), TIMEOUT);
+      timer = setTimeout(() => done(null), WALL_TIMEOUT);
       function done(v) {
         if (!v || v.stale > MAX_STALE_IMAGES) misses.push({ i, effect_seen: at !== null, stale_images: staleImages, sim_time: simTime, image_time: L.imageTime, f0, f: force(L.state), last_error: L.lastError, observer: L.state.observer });
         clearTimeout(timer); L.listeners.splice(L.listeners.indexOf(fn), 1); resolve(v);
@@ -182,6 +210,7 @@ const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
   }
   run = false;
   L.listeners.splice(L.listeners.indexOf(onImage), 1);
+  L.listeners.splice(L.listeners.indexOf(onRecent), 1);
   const imageIntervals = imageAt.slice(1).map((t, i) => t - imageAt[i]);
   const secs = (performance.now() - t00) / 1000;
   const q = (a, p) => { const s = [...a].sort((x, y) => x - y); return s.length ? s[Math.min(s.length - 1, Math.floor(p * s.length))] : null; };
@@ -270,10 +299,61 @@ try {
   }, before.physics, 'the force to rise under the probe');
   check('dragging the probe raises the force', true,
     `|F| ${before.physics.toFixed(2)} → ${pressed.physics.toFixed(2)} N (rendered ${pressed.rendered.toFixed(2)} N) at depth ${(pressed.depth * 1000).toFixed(1)} mm`);
+  // The guided start (issue 19) opened on this first visit (a fresh browser
+  // profile) and ticked off "place the probe on the skin" from the state.
+  const guideStep = await page.evaluate(() => {
+    const g = document.getElementById('guide');
+    return g.hidden ? null : Number(g.dataset.step);
+  });
+  check('the guided start opened on the first visit and followed the press', guideStep !== null && guideStep >= 2,
+    guideStep === null ? 'the guide is hidden' : `at step ${guideStep} of 5`);
   await page.waitForTimeout(1500); // let the plot and the image fill in
   await page.evaluate(() => { document.querySelector('aside').scrollTop = 0; });
   await page.screenshot({ path: join(shots, '02-pressing.png') });
   await page.mouse.up();
+
+  // Doppler (issue 17), one short step: the probe eased to 4 mm where it
+  // was (the vessels open), colour mode colours pixels of the image
+  // canvas (saturated: its max and min channels 60 or more apart, which no
+  // grey pixel is), with the bytes per second of colour on within the
+  // budget; spectral mode draws the spectrogram (lines arrive and the
+  // trace is not black); back to B-mode for the rest of the test.
+  await page.evaluate(() => {
+    const p = window.echothigh.probe;
+    window.echothigh.send({ type: 'probe', theta: p.theta, z: p.z, depth: 0.004, tilt: 0 });
+  });
+  await page.click('input[name="dmode"][value="color"]');
+  const colourAt = await page.evaluate(() => ({ bytes: window.echothigh.bytes, t: performance.now() }));
+  const saturated = () => {
+    const c = document.getElementById('echo');
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) {
+      if (Math.max(d[i], d[i + 1], d[i + 2]) - Math.min(d[i], d[i + 1], d[i + 2]) >= 60) n++;
+    }
+    return n;
+  };
+  const coloured = await until(page, saturated, null, 'coloured pixels in the image (colour mode)');
+  await page.waitForTimeout(2500);
+  const colourRate = await page.evaluate((a) => (window.echothigh.bytes - a.bytes) / ((performance.now() - a.t) / 1000), colourAt);
+  await page.screenshot({ path: join(shots, '02b-colour.png') });
+  check('colour mode colours the image', coloured > 0, `${coloured} coloured pixels; ${(colourRate / 1000).toFixed(0)} KB/s with colour on`);
+  check('bytes per second with colour on within the 400 KB/s budget', colourRate <= 400_000, `${(colourRate / 1000).toFixed(0)} KB/s`);
+  await page.click('input[name="dmode"][value="spectral"]');
+  const trace = await until(page, () => {
+    const d = window.echothigh.doppler;
+    if (!d || d.linesShown < 50) return null;
+    const c = document.getElementById('spectrum');
+    const px = c.getContext('2d').getImageData(0, 0, c.width - 60, c.height).data;
+    let sum = 0;
+    for (let i = 0; i < px.length; i += 4) sum += px[i];
+    const mean = sum / (px.length / 4);
+    return mean > 2 ? { lines: d.linesShown, mean } : null;
+  }, null, 'the spectrogram drawn (spectral mode)');
+  await page.screenshot({ path: join(shots, '02c-spectral.png') });
+  check('spectral mode draws the spectrogram', true, `${trace.lines} lines, mean level ${trace.mean.toFixed(1)}`);
+  await page.click('input[name="dmode"][value="bmode"]');
+  await until(page, () => window.echothigh.state.doppler && window.echothigh.state.doppler.mode === 'bmode', null, 'B-mode again');
 
   // Vein state.
   await page.selectOption('#vein', 'chronic');
@@ -301,9 +381,12 @@ try {
     return e && e.open && window.echothigh.state.vein === null ? e : null;
   }, null, 'an open exam case with the vein hidden');
   check('exam hides the vein state', await page.isDisabled('#vein'));
-  const selects = await page.$$('#exam-sites select');
-  check('the protocol checklist has a call per site', opened.sites.length === 3 && selects.length === 3 &&
-    opened.last === null, opened.sites.map((x) => x.name).join(', '));
+  const selects = await page.$$('#exam-sites select[data-site]');
+  const dopplerSelects = await page.$$('#exam-sites select[data-doppler]');
+  check('the protocol checklist has a call per site, and a Doppler call per Doppler site',
+    opened.sites.length === 3 && selects.length === 3 && dopplerSelects.length === opened.doppler.length &&
+      opened.doppler.length === 2 && opened.last === null,
+    `${opened.sites.map((x) => x.name).join(', ')}; Doppler at ${opened.doppler.map((x) => x.name).join(', ')}`);
   await until(page, () => window.echothigh.state.section !== null, null, 'a reading of the imaged section');
   await page.mouse.move(start.x, start.y);
   await page.mouse.down();
@@ -398,6 +481,15 @@ try {
     `|F| ${keyed.f.toFixed(2)} N at ${(keyed.depth * 1000).toFixed(1)} mm, ${mouseEvents} mouse events`);
   // A shortcut key on a focused control acts on the control, not the probe.
   const depthBefore = await page.evaluate(() => window.echothigh.probe.depth);
+  // The technical status and settings (issue 19) are hidden on a first visit
+  // and shown by their toggle.
+  const techShown = () => page.evaluate(() => document.getElementById('status-panel').getClientRects().length > 0 &&
+    document.getElementById('mode').getClientRects().length > 0);
+  const techBefore = await techShown();
+  await page.click('#tech-open');
+  const techAfter = await techShown();
+  check('the technical status is hidden until its toggle is pressed', !techBefore && techAfter,
+    `before ${techBefore ? 'shown' : 'hidden'}, after ${techAfter ? 'shown' : 'hidden'}`);
   await page.focus('#mode');
   await page.keyboard.press('w');
   check('shortcuts do not act while a control has focus',
@@ -446,7 +538,7 @@ try {
   await cdp.send('Emulation.setCPUThrottlingRate', { rate: 1 });
   writeFileSync(join(shots, 'viewer-lag.json'), JSON.stringify(lag, null, 2));
   const ms = (x) => (x === null ? 'n/a' : `${x.toFixed(0)} ms`);
-  console.log(`info lag over ${lag.commands} commands (${lag.missed} missed: no state effect within 3 s, counted as 3 s, or more than ${MAX_STALE_IMAGES} stale images first; stale images p50 ${lag.stale_images.p50} max ${lag.stale_images.max}): state p50 ${ms(lag.state.p50)} p95 ${ms(lag.state.p95)}, ` +
+  console.log(`info lag over ${lag.commands} commands (${lag.missed} missed: no state effect within 3 s of simulated time, counted as 3 s, or more than ${MAX_STALE_IMAGES} stale images first; stale images p50 ${lag.stale_images.p50} max ${lag.stale_images.max}): state p50 ${ms(lag.state.p50)} p95 ${ms(lag.state.p95)}, ` +
     `image p50 ${ms(lag.image.p50)} p95 ${ms(lag.image.p95)}; page frames p95 ${ms(lag.frame_p95)}; ${(lag.bytes_per_s / 1000).toFixed(0)} KB/s (${join(shots, 'viewer-lag.json')})`);
   // The wire's budget is 360 KB/s of payload by construction (the server's
   // token bucket, frames.rs), so 400 KB/s holds whatever the machine's load.
@@ -473,10 +565,10 @@ try {
   const keepsUp = lag.physics_rate >= 0.8 * lag.physics_rate_setting;
   const bound = 150 + 2 * lag.frame_p95;
   // What is asserted: no backlog. Every one of the 50 commands showed its
-  // effect in the state within 3 s (before flow control, issue 19 measured
+  // effect in the state within 3 s of simulated time (before flow control, issue 19 measured
   // 4–6 s at 1280×800, so every command would miss), and in the image after
   // at most MAX_STALE_IMAGES stale images (derived above).
-  check(`every command reaches the state within 3 s and the image after at most ${MAX_STALE_IMAGES} stale images (no backlog)`, lag.missed === 0,
+  check(`every command reaches the state within 3 s of simulated time and the image after at most ${MAX_STALE_IMAGES} stale images (no backlog)`, lag.missed === 0,
     `${lag.missed} of ${lag.commands} missed: ${JSON.stringify(lag.misses)}`);
   // Reported, not asserted: the frame-interval bounds above are not yet
   // derived well enough to hold (on an idle machine the state's p95 was

@@ -18,6 +18,14 @@ use nalgebra::{Matrix2x3, Matrix3, Matrix3x2, RowVector3};
 /// finer than any centreline's turn (each moves < 1.2 mm per mm of s).
 const ROOT_SCAN: f64 = 1e-3;
 
+/// How far (m) above the inguinal ligament a tube that starts there (the
+/// common femoral vessels, the femur) is continued when the plane crosses
+/// its line only beyond it: 40 mm. On the leg the vessels go on as the
+/// external iliac ones and the femur as its neck; a transverse plane at
+/// `s` ≈ 0 on the sloping groin (the skin normal tilts proximally) reaches
+/// `s` < 0 at depth: at 60 mm depth a 30° slope moves the plane ≈ 35 mm.
+const PROXIMAL_CONTINUATION: f64 = 0.04;
+
 /// One patient's leg anatomy (a right leg; frame in [`crate::frame`]).
 #[derive(Debug, Clone)]
 pub struct Anatomy {
@@ -372,6 +380,23 @@ pub fn cut_tube(tube: &Tube, plane: &ImagePlane) -> Vec<(f64, Ellipse)> {
     if prev.1 == 0.0 {
         if let Some(e) = ellipse_at(tube, plane, prev.0) {
             out.push((prev.0, e));
+        }
+    }
+    if out.is_empty() && s0 <= 0.0 {
+        // The tube continues above the ligament (see PROXIMAL_CONTINUATION):
+        // its line extended straight from s0, `C(s0) + a (s − s0)`, crosses
+        // the plane at `s − s0 = −g(s0)/(n·a)`; within the continuation, the
+        // cut is that of the tube linearised at s0 (reported at s0, the
+        // nearest `s` of the tube's own range).
+        let a = tube.axis_derivative(s0);
+        let na = plane.normal.dot(&a);
+        if na.abs() > 1e-9 {
+            let t = -g(s0) / na;
+            if (-PROXIMAL_CONTINUATION..0.0).contains(&t) {
+                if let Some(e) = ellipse_at(tube, plane, s0) {
+                    out.push((s0, e));
+                }
+            }
         }
     }
     out

@@ -49,7 +49,7 @@ pub use error::AnatomyError;
 pub use frame::Vec3;
 pub use leg::LegShape;
 pub use levels::{LegLevel, Levels};
-pub use lumen_state::{Layout, LumenState, Thrombi, TruthPiece, VeinTruth};
+pub use lumen_state::{tail_sway, Layout, LumenState, Thrombi, TruthPiece, VeinTruth};
 pub use patient::{Patient, Sex, PRESETS};
 pub use section::{ImagePlane, ProbePose, Section, SectionStructure, Site};
 pub use structure::{CrossSection, Ellipsoid, Kind, StructureId, Tube};

@@ -62,6 +62,20 @@ pub struct LumenState {
     pub chronic: f64,
     /// Weight (0 to 1) of a free-floating tail here (must not be compressed hard).
     pub free_floating: f64,
+    /// How far the tail here sways with breathing relative to its free tip
+    /// (0 where attached, 1 at the tip; [`tail_sway`]).
+    pub sway: f64,
+}
+
+/// Relative sway of a free tail at normalised distance `xi` (0 to 1) from
+/// its attachment towards its free tip: the deflection of a cantilever
+/// under a uniform load (the drag of the flow along it),
+/// `ξ² (6 − 4ξ + ξ²) / 3`, which is 0 with zero slope at the attachment
+/// and 1 at the tip (Timoshenko, *Strength of Materials*, cantilever with
+/// uniform load: `w(x) = q x² (6L² − 4Lx + x²) / (24 E I)`).
+pub fn tail_sway(xi: f64) -> f64 {
+    let x = xi.clamp(0.0, 1.0);
+    x * x * (6.0 - 4.0 * x + x * x) / 3.0
 }
 
 impl LumenState {
@@ -77,6 +91,7 @@ impl LumenState {
         acute: 0.0,
         chronic: 0.0,
         free_floating: 0.0,
+        sway: 0.0,
     };
 
     /// Smallest lumen area relative to rest under full compression:
@@ -106,13 +121,15 @@ impl LumenState {
             acute: m(self.acute, o.acute),
             chronic: m(self.chronic, o.chronic),
             free_floating: m(self.free_floating, o.free_floating),
+            sway: m(self.sway, o.sway),
         }
     }
 }
 
 /// The state of segment `t` at full weight; `tail` (0 to 1) is the weight
-/// of its free-floating tail at this `s`.
-pub fn kind_state(t: &Thrombus, tail: f64) -> LumenState {
+/// of its free-floating tail at this `s`, `sway` the tail's relative sway
+/// there ([`tail_sway`]; 0 for other kinds).
+pub fn kind_state(t: &Thrombus, tail: f64, sway: f64) -> LumenState {
     let acute = LumenState {
         fill: 1.0,
         fill_min_ratio: ACUTE_MIN_RATIO,
@@ -124,6 +141,7 @@ pub fn kind_state(t: &Thrombus, tail: f64) -> LumenState {
         acute: 1.0,
         chronic: 0.0,
         free_floating: 0.0,
+        sway: 0.0,
     };
     match t.kind {
         ThrombusKind::AcuteOcclusive => acute,
@@ -136,6 +154,7 @@ pub fn kind_state(t: &Thrombus, tail: f64) -> LumenState {
                 fill: t.fill,
                 layout: Layout::Central,
                 free_floating: 1.0,
+                sway,
                 ..acute
             };
             let mut s = acute.lerp(&floating, tail);
@@ -157,6 +176,7 @@ pub fn kind_state(t: &Thrombus, tail: f64) -> LumenState {
             acute: 0.0,
             chronic: 1.0,
             free_floating: 0.0,
+            sway: 0.0,
         },
     }
 }
@@ -237,7 +257,11 @@ impl Thrombi {
         on.sort_by(|a, b| a.0.total_cmp(&b.0));
         let mut st = LumenState::HEALTHY;
         for (w, t) in on {
-            st = add_weighted(&st, &kind_state(t, t.tail_weight(s)), w * scale);
+            st = add_weighted(
+                &st,
+                &kind_state(t, t.tail_weight(s), tail_sway(t.tail_position(s))),
+                w * scale,
+            );
         }
         st
     }
@@ -314,5 +338,6 @@ fn add_weighted(st: &LumenState, k: &LumenState, w: f64) -> LumenState {
         acute: m(st.acute, k.acute, h.acute),
         chronic: m(st.chronic, k.chronic, h.chronic),
         free_floating: m(st.free_floating, k.free_floating, h.free_floating),
+        sway: m(st.sway, k.sway, h.sway),
     }
 }

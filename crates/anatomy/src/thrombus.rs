@@ -374,4 +374,14 @@ impl Thrombus {
         }
         crate::interp::smoothstep((self.s_start + self.tail - s) / self.transition + 0.5)
     }
+
+    /// Normalised position (0 to 1) of `s` along the free tail, from its
+    /// attachment (`s_start + tail`, 0) to its free proximal tip
+    /// (`s_start`, 1); 0 for kinds without a tail.
+    pub fn tail_position(&self, s: f64) -> f64 {
+        if self.kind != ThrombusKind::FreeFloating || self.tail <= 0.0 {
+            return 0.0;
+        }
+        ((self.s_start + self.tail - s) / self.tail).clamp(0.0, 1.0)
+    }
 }

@@ -96,6 +96,39 @@ fn free_floating_tail_is_central_then_attached() {
     assert_eq!(attached.free_floating, 0.0);
 }
 
+/// The tail's sway: the cantilever shape `ξ² (6 − 4ξ + ξ²)/3` of the
+/// distance from the attachment (s_start + tail = 25 mm) to the free tip
+/// (s_start = 5 mm): 0 at and beyond the attachment, rising monotonically
+/// towards the tip, and the analytic value inside the tail where the
+/// segment's weight is 1 (e.g. ξ = 0.5 at 15 mm: 0.25 · 4.25 / 3).
+#[test]
+fn free_tail_sways_most_at_its_tip() {
+    let a = anatomy();
+    let mut ff = spec("cfv", 0.005, 0.055, "free_floating");
+    ff.tail = Some(0.02);
+    let t = Thrombi::new(&a, &[ff]).unwrap();
+    let sway = |s: f64| t.state(StructureId::Cfv, s).sway;
+    assert_eq!(sway(0.03), 0.0);
+    assert_eq!(sway(0.045), 0.0);
+    assert!((sway(0.015) - 0.25 * 4.25 / 3.0).abs() < 1e-12);
+    let mut last = 0.0;
+    for k in 0..=18 {
+        // From the attachment to 7 mm (2 mm from the tip: the segment's
+        // weight is 1 from s_start + transition/2 on).
+        let s = 0.025 - k as f64 * 1e-3;
+        let w = sway(s);
+        assert!(w >= last, "sway falls towards the tip at {s}");
+        last = w;
+    }
+    // ξ = 0.9 at 7 mm: 0.81 · 3.21 / 3.
+    assert!(
+        (last - 0.81 * 3.21 / 3.0).abs() < 1e-12,
+        "sway near the tip {last}"
+    );
+    assert_eq!(echothigh_anatomy::tail_sway(1.0), 1.0);
+    assert_eq!(echothigh_anatomy::tail_sway(0.0), 0.0);
+}
+
 #[test]
 fn abutting_segments_blend_without_a_gap() {
     let a = anatomy();

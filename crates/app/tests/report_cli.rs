@@ -113,6 +113,7 @@ fn case(
             })
             .collect(),
         missed: Vec::new(),
+        doppler: Default::default(),
     };
     rec.finish(&bins, &score).unwrap();
 }

@@ -126,8 +126,43 @@ impl ColorFlow {
         rgb: &mut [u8],
     ) -> Result<(), DopplerError> {
         let np = self.columns * self.rows;
-        DopplerError::size("colour: B-mode frame", np, bmode.len())?;
         DopplerError::size("colour: RGB frame", 3 * np, rgb.len())?;
+        let mode = self.mode;
+        self.process(bmode, scene, |p, g, colour| {
+            let px = colour.map_or([g, g, g], |c| ramp(mode, c));
+            rgb[3 * p..3 * p + 3].copy_from_slice(&px);
+        })
+    }
+
+    /// Processes one frame as [`ColorFlow::frame`] but writes, instead of
+    /// RGB, one overlay code per pixel into `codes` (`columns · rows`): 0
+    /// where no colour is shown, else [`code_of`] of the pixel's colour (the
+    /// live viewer sends these, 1 byte a pixel and mostly zeros, and the
+    /// page maps them with the same ramp, [`code_rgb`]). Allocates nothing.
+    pub fn codes(
+        &mut self,
+        bmode: &[u8],
+        scene: &FlowScene,
+        codes: &mut [u8],
+    ) -> Result<(), DopplerError> {
+        let np = self.columns * self.rows;
+        DopplerError::size("colour: overlay codes", np, codes.len())?;
+        self.process(bmode, scene, |p, _, colour| {
+            codes[p] = colour.map_or(0, code_of);
+        })
+    }
+
+    /// The processing shared by [`ColorFlow::frame`] and
+    /// [`ColorFlow::codes`]: `out(pixel, grey, colour)` for every pixel,
+    /// `colour` `None` where none is shown.
+    fn process(
+        &mut self,
+        bmode: &[u8],
+        scene: &FlowScene,
+        mut out: impl FnMut(usize, u8, Option<Colour>),
+    ) -> Result<(), DopplerError> {
+        let np = self.columns * self.rows;
+        DopplerError::size("colour: B-mode frame", np, bmode.len())?;
         self.frame = self.frame.wrapping_add(1);
         let c = &self.cfg;
         let m = c.ensemble;
@@ -143,13 +178,13 @@ impl ColorFlow {
             for (j, &lat) in self.col_lateral.iter().enumerate() {
                 let p = i * self.columns + j;
                 let g = bmode[p];
-                rgb[3 * p..3 * p + 3].copy_from_slice(&[g, g, g]);
                 self.velocity[p] = f32::NAN;
                 if lat < c.box_left
                     || lat > c.box_right
                     || depth < c.box_top
                     || depth > c.box_bottom
                 {
+                    out(p, g, None);
                     continue;
                 }
                 let (v_ax, blood) = match scene.blood_at(lat, depth) {
@@ -185,33 +220,84 @@ impl ColorFlow {
                 let power = r0 / m as f32;
                 let v = r1.arg() / std::f32::consts::PI * v_nyq;
                 if power < power_min || g > c.priority || v.abs() < c.min_velocity as f32 * v_nyq {
+                    out(p, g, None);
                     continue;
                 }
                 self.velocity[p] = v;
-                let px = match self.mode {
-                    ColorMode::Velocity => {
-                        let s = (v.abs() / v_nyq).min(1.0);
-                        let hi = (110.0 + 145.0 * s) as u8;
-                        let lo = (60.0 * s * s) as u8;
-                        if v > 0.0 {
-                            [hi, lo, 0]
-                        } else {
-                            [0, lo, hi]
-                        }
-                    }
+                let colour = match self.mode {
+                    ColorMode::Velocity => Colour::Velocity((v / v_nyq).clamp(-1.0, 1.0)),
                     ColorMode::Power => {
                         let db = 10.0 * (power / power_min).log10();
-                        let s = (db / 30.0).clamp(0.0, 1.0);
-                        [
-                            (120.0 + 135.0 * s) as u8,
-                            (40.0 + 150.0 * s) as u8,
-                            (20.0 * s) as u8,
-                        ]
+                        Colour::Power((db / 30.0).clamp(0.0, 1.0))
                     }
                 };
-                rgb[3 * p..3 * p + 3].copy_from_slice(&px);
+                out(p, g, Some(colour));
             }
         }
         Ok(())
     }
+}
+
+/// A coloured pixel's value: velocity as a fraction of Nyquist (−1 to 1,
+/// towards the probe positive), or power as a fraction (0 to 1) of the
+/// 30 dB above the threshold the ramp spans.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Colour {
+    /// Mean velocity over the Nyquist velocity.
+    Velocity(f32),
+    /// Power above the threshold, 0 to 1 over 30 dB.
+    Power(f32),
+}
+
+/// The RGB of a coloured pixel. Velocity: towards the probe red, away blue
+/// (BART), brighter with speed; power: an orange ramp. The same mode is
+/// assumed as produced the colour.
+fn ramp(_mode: ColorMode, c: Colour) -> [u8; 3] {
+    match c {
+        Colour::Velocity(f) => {
+            let s = f.abs().min(1.0);
+            let hi = (110.0 + 145.0 * s) as u8;
+            let lo = (60.0 * s * s) as u8;
+            if f > 0.0 {
+                [hi, lo, 0]
+            } else {
+                [0, lo, hi]
+            }
+        }
+        Colour::Power(s) => [
+            (120.0 + 135.0 * s) as u8,
+            (40.0 + 150.0 * s) as u8,
+            (20.0 * s) as u8,
+        ],
+    }
+}
+
+/// The overlay code (1 to 255) of a coloured pixel: velocity
+/// `128 + round(127 f)` (never 128: a coloured pixel has a sign), power
+/// `1 + round(254 s)`. 0 is reserved for "no colour".
+pub fn code_of(c: Colour) -> u8 {
+    match c {
+        Colour::Velocity(f) => {
+            let k = 128 + (127.0 * f.clamp(-1.0, 1.0)).round() as i32;
+            match k {
+                128 if f >= 0.0 => 129,
+                128 => 127,
+                k => k.clamp(1, 255) as u8,
+            }
+        }
+        Colour::Power(s) => 1 + (254.0 * s.clamp(0.0, 1.0)).round() as u8,
+    }
+}
+
+/// The RGB of overlay code `code` in `mode` (`None` for 0): the ramp of
+/// [`ColorFlow::frame`] at the code's value, which the page reproduces.
+pub fn code_rgb(mode: ColorMode, code: u8) -> Option<[u8; 3]> {
+    if code == 0 {
+        return None;
+    }
+    let c = match mode {
+        ColorMode::Velocity => Colour::Velocity((code as f32 - 128.0) / 127.0),
+        ColorMode::Power => Colour::Power((code as f32 - 1.0) / 254.0),
+    };
+    Some(ramp(mode, c))
 }

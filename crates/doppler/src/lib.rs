@@ -37,7 +37,7 @@ mod spectrum;
 mod wall_filter;
 
 pub use audio::AudioSynth;
-pub use color::{ColorFlow, ColorMode};
+pub use color::{code_of, code_rgb, ColorFlow, ColorMode, Colour};
 pub use color_config::ColorConfig;
 pub use display::SpectralDisplay;
 pub use error::DopplerError;

@@ -94,6 +94,35 @@ impl Maneuvers {
         self.push(Event::Valsalva(start, end.max(start)));
     }
 
+    /// A held Valsalva strain begun at `start` (s), open until
+    /// [`Maneuvers::end_valsalva`] (the live viewer's "hold" control).
+    pub fn begin_valsalva(&mut self, start: f64) {
+        self.push(Event::Valsalva(start, f64::INFINITY));
+    }
+
+    /// Ends every open strain at `t` (s) (one that began after `t` ends
+    /// where it began). Returns whether one was open.
+    pub fn end_valsalva(&mut self, t: f64) -> bool {
+        let mut open = false;
+        for e in self.events.iter_mut().flatten() {
+            if let Event::Valsalva(t0, t1) = e {
+                if t1.is_infinite() {
+                    *t1 = t.max(*t0);
+                    open = true;
+                }
+            }
+        }
+        open
+    }
+
+    /// Whether a strain is held open ([`Maneuvers::begin_valsalva`]).
+    pub fn valsalva_held(&self) -> bool {
+        self.events
+            .iter()
+            .flatten()
+            .any(|e| matches!(e, Event::Valsalva(_, t1) if t1.is_infinite()))
+    }
+
     /// A probe compression released at `t` (s): a brief augmentation.
     pub fn release(&mut self, t: f64) {
         self.push(Event::Release(t));
@@ -174,5 +203,31 @@ mod tests {
         let after = m.valsalva_flow(&cfg, 4.0 + 1e-9);
         assert!((before - after).abs() < 1e-6);
         assert!(m.valsalva_flow(&cfg, 10.0) > 0.999);
+    }
+
+    /// A held strain is the scripted one of the same length: the same
+    /// flow before, during and after its end, to the last bit (the open
+    /// end only changes which branch is taken before `end_valsalva`).
+    #[test]
+    fn a_held_valsalva_equals_the_scripted_one() {
+        let cfg = FlowConfig::default();
+        let scripted = Maneuvers::scripted(Maneuver::Valsalva, 1.0, 2.5);
+        let mut held = Maneuvers::new();
+        held.begin_valsalva(1.0);
+        assert!(held.valsalva_held());
+        for t in [0.5, 1.2, 3.0] {
+            assert_eq!(held.valsalva_flow(&cfg, t), scripted.valsalva_flow(&cfg, t));
+        }
+        assert!(held.end_valsalva(3.5));
+        assert!(!held.valsalva_held());
+        assert!(!held.end_valsalva(4.0), "nothing left open");
+        for t in [0.5, 1.2, 3.0, 3.6, 5.0] {
+            assert_eq!(held.valsalva_flow(&cfg, t), scripted.valsalva_flow(&cfg, t));
+            assert_eq!(
+                held.augmentation(&cfg, t),
+                scripted.augmentation(&cfg, t),
+                "t = {t}"
+            );
+        }
     }
 }

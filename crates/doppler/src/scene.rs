@@ -8,7 +8,7 @@ use crate::maneuver::Maneuvers;
 use crate::physiology::FlowConfig;
 use crate::profile::Profile;
 use echothigh_anatomy::Thrombi;
-use echothigh_anatomy::{Anatomy, ImagePlane, Kind, Section, StructureId, Vec3};
+use echothigh_anatomy::{Anatomy, ImagePlane, Kind, ProbePose, Section, StructureId, Vec3};
 use echothigh_imaging::{AnatomyConfig, FrameInput, ImagingError, Renderer};
 
 /// Largest number of vessels a scene holds (the studied pair plus
@@ -66,6 +66,9 @@ impl FlowVessel {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct FlowScene {
     vessels: [FlowVessel; MAX_FLOW_VESSELS],
+    /// Each vessel's index in the renderer's anatomy (its order of push
+    /// when pushed without one).
+    ids: [usize; MAX_FLOW_VESSELS],
     n: usize,
     /// Velocity of the tissue relative to the probe along the beam (m/s,
     /// towards the probe positive): the probe's motion, the flash source.
@@ -85,8 +88,15 @@ impl FlowScene {
 
     /// Adds a vessel (ignored beyond [`MAX_FLOW_VESSELS`]).
     pub fn push(&mut self, v: FlowVessel) {
+        self.push_indexed(self.n, v);
+    }
+
+    /// Adds vessel `index` of the renderer's anatomy (ignored beyond
+    /// [`MAX_FLOW_VESSELS`]).
+    pub fn push_indexed(&mut self, index: usize, v: FlowVessel) {
         if self.n < MAX_FLOW_VESSELS {
             self.vessels[self.n] = v;
+            self.ids[self.n] = index;
             self.n += 1;
         }
     }
@@ -102,6 +112,15 @@ impl FlowScene {
             .iter()
             .find_map(|v| v.blood_at(lateral, depth).map(|r| (v, r)))
     }
+
+    /// As [`FlowScene::blood_at`], with the vessel's index in the
+    /// renderer's anatomy (the index of [`SectionFlows::flow`]).
+    pub fn blood_at_indexed(&self, lateral: f64, depth: f64) -> Option<(usize, &FlowVessel, f64)> {
+        self.vessels()
+            .iter()
+            .zip(&self.ids)
+            .find_map(|(v, &i)| v.blood_at(lateral, depth).map(|r| (i, v, r)))
+    }
 }
 
 /// What a section's vessels carry, built once per section: for each vessel
@@ -111,6 +130,7 @@ impl FlowScene {
 pub struct SectionFlows {
     items: Vec<(SegmentFlow, Vec3, Profile, f64, bool)>,
     plane: ImagePlane,
+    pose: ProbePose,
 }
 
 impl SectionFlows {
@@ -168,7 +188,25 @@ impl SectionFlows {
                 central,
             ));
         }
-        Ok(SectionFlows { items, plane })
+        Ok(SectionFlows {
+            items,
+            plane,
+            pose: section.pose,
+        })
+    }
+
+    /// The same flows seen by a beam rocked `tilt` (rad, + aims distally)
+    /// out of the drawn section's plane: the heel-toe angling a sonographer
+    /// gives the probe to see flow in a transverse view. Only the beam's
+    /// direction changes (the vessels and their flows are the drawn
+    /// section's).
+    pub fn beam_tilted(
+        mut self,
+        anatomy: &Anatomy,
+        tilt: f64,
+    ) -> Result<SectionFlows, echothigh_anatomy::AnatomyError> {
+        self.plane = anatomy.image_plane(&ProbePose { tilt, ..self.pose })?;
+        Ok(self)
     }
 
     /// The segment flow of vessel `i` of the renderer's anatomy.
@@ -210,16 +248,19 @@ impl SectionFlows {
             if half_height <= 0.0 || l.half_width <= 0.0 {
                 continue;
             }
-            scene.push(FlowVessel {
-                lateral: l.lateral,
-                depth: l.depth,
-                half_width: l.half_width,
-                half_height,
-                axial_velocity: v * self.cos_to_probe(i, steer),
-                profile: *profile,
-                fill: *fill,
-                central: *central,
-            });
+            scene.push_indexed(
+                i,
+                FlowVessel {
+                    lateral: l.lateral,
+                    depth: l.depth,
+                    half_width: l.half_width,
+                    half_height,
+                    axial_velocity: v * self.cos_to_probe(i, steer),
+                    profile: *profile,
+                    fill: *fill,
+                    central: *central,
+                },
+            );
         }
         Ok(())
     }

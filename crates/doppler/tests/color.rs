@@ -215,3 +215,57 @@ fn colour_deterministic_for_a_seed() {
     let b = run(&ColorConfig::default(), &scene).0.velocity;
     assert!(a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits()));
 }
+
+/// The overlay codes the live viewer sends are the RGB frame: two
+/// processors with the same seed see the same ensembles, so every pixel
+/// coloured in one is coded in the other and `code_rgb` of its code is its
+/// RGB within the ramp's quantization (the velocity fraction is rounded to
+/// 1/127, moving the ramp's bright channel by at most 145/254 + 1 for the
+/// truncation ≈ 1.6 levels: 2 allowed), in velocity and power modes.
+#[test]
+fn overlay_codes_reproduce_the_rgb_frame() {
+    use echothigh_doppler::code_rgb;
+    let mut scene = FlowScene::new();
+    scene.push(vein(0.08, 0.0));
+    scene.push(FlowVessel {
+        lateral: -0.012,
+        depth: 0.02,
+        axial_velocity: -0.05,
+        ..vein(0.0, 0.0)
+    });
+    let b = bmode(&scene);
+    for mode in [ColorMode::Velocity, ColorMode::Power] {
+        let cfg = ColorConfig::default();
+        let mut a = ColorFlow::new(&cfg, mode, &lateral(), ROWS, PZ).unwrap();
+        let mut c = ColorFlow::new(&cfg, mode, &lateral(), ROWS, PZ).unwrap();
+        let mut rgb = vec![0u8; 3 * COLS * ROWS];
+        let mut codes = vec![0u8; COLS * ROWS];
+        a.frame(&b, &scene, &mut rgb).unwrap();
+        c.codes(&b, &scene, &mut codes).unwrap();
+        let mut coloured = 0;
+        for p in 0..COLS * ROWS {
+            let px = [rgb[3 * p], rgb[3 * p + 1], rgb[3 * p + 2]];
+            match code_rgb(mode, codes[p]) {
+                None => {
+                    assert!(
+                        a.velocity[p].is_nan(),
+                        "{mode:?} pixel {p}: coloured, no code"
+                    );
+                    assert_eq!(px, [b[p]; 3]);
+                }
+                Some(q) => {
+                    coloured += 1;
+                    for k in 0..3 {
+                        let d = (px[k] as i32 - q[k] as i32).abs();
+                        assert!(d <= 2, "{mode:?} pixel {p}: rgb {px:?} code {q:?}");
+                    }
+                }
+            }
+        }
+        assert!(coloured > 100, "{mode:?}: {coloured} coloured pixels");
+        assert!(
+            c.codes(&b, &scene, &mut codes[1..]).is_err(),
+            "wrong size refused"
+        );
+    }
+}

@@ -5,11 +5,13 @@
 //! call when it is made, the score when the case is finished), so that a
 //! crash loses nothing already done.
 
-use crate::coverage::Coverage;
+use crate::coverage::{event_state, Coverage};
 use crate::detector::{DetectorError, EventDetector, ExamSample};
-use crate::score::{score_case, truth_at, ScoreInput};
+use crate::doppler::{doppler_sites, doppler_truth, score_doppler};
+use crate::score::{score_case, truth_for_call, ScoreInput};
 use crate::{
-    Call, CaseScore, CompressionEvent, ExamLog, Finding, LogError, Protocol, ProtocolSite,
+    BinState, Call, CaseScore, CompressionEvent, DopplerCall, DopplerFinding, ExamLog, Finding,
+    LogError, Protocol, ProtocolSite,
 };
 use echothigh_anatomy::VeinTruth;
 use echothigh_cases::Case;
@@ -25,6 +27,14 @@ pub enum CaseExamError {
     /// A sample was malformed (the detector names the field).
     #[error(transparent)]
     Sample(#[from] DetectorError),
+    /// A Doppler call named no Doppler site.
+    #[error("no Doppler site `{site}` (the Doppler sites: {known})")]
+    UnknownDopplerSite {
+        /// The name given.
+        site: String,
+        /// The names there are.
+        known: String,
+    },
     /// A call named no site of the protocol.
     #[error("no site `{site}` in the {protocol} protocol (its sites: {known})")]
     UnknownSite {
@@ -50,6 +60,9 @@ pub struct CaseExam {
     coverage: Coverage,
     events: Vec<CompressionEvent>,
     calls: Vec<Call>,
+    doppler_sites: Vec<ProtocolSite>,
+    doppler_truth: Vec<DopplerFinding>,
+    doppler_calls: Vec<DopplerCall>,
     last_t: f64,
     peak_force: f64,
 }
@@ -58,7 +71,14 @@ impl CaseExam {
     /// Starts examining `case` under `protocol`: every site undone, every
     /// bin not examined.
     pub fn new(case: &Case, protocol: Protocol) -> CaseExam {
+        let doppler_sites = doppler_sites(&case.anatomy);
         CaseExam {
+            doppler_truth: doppler_sites
+                .iter()
+                .map(|x| doppler_truth(case, x.s))
+                .collect(),
+            doppler_sites,
+            doppler_calls: Vec::new(),
             case: case.file.name.clone(),
             protocol,
             sites: protocol.sites(&case.anatomy),
@@ -105,7 +125,9 @@ impl CaseExam {
 
     /// The trainee calls `finding` at the protocol's site `site` at time `t`
     /// (s since the case started); a later call on a site replaces an
-    /// earlier one in the score, both are recorded.
+    /// earlier one in the score, both are recorded. The call's truth is
+    /// the one it is scored against ([`truth_for_call`]: a site within the
+    /// probe's footprint of a thrombus's end accepts either finding).
     pub fn call(
         &mut self,
         site: &str,
@@ -130,12 +152,48 @@ impl CaseExam {
             vein: x.vein.clone(),
             s: x.s,
             finding,
-            truth: truth_at(&self.truth, &x.vein, x.s).unwrap_or(Finding::Normal),
+            truth: truth_for_call(&self.truth, &x.vein, x.s, Some(finding)),
             t,
         };
         log.call(&call)?;
         self.calls.push(call);
         Ok(self.calls.last().expect("just pushed"))
+    }
+
+    /// The trainee reads the spectral Doppler at the Doppler site `site`
+    /// (`cfv`, `popliteal`: [`crate::doppler::doppler_sites`]) as `finding`
+    /// at time `t` (s); a later call replaces an earlier one in the score,
+    /// both are recorded.
+    pub fn call_doppler(
+        &mut self,
+        site: &str,
+        finding: DopplerFinding,
+        t: f64,
+        log: &mut dyn ExamLog,
+    ) -> Result<&DopplerCall, CaseExamError> {
+        let Some(i) = self.doppler_sites.iter().position(|x| x.name == site) else {
+            return Err(CaseExamError::UnknownDopplerSite {
+                site: site.to_string(),
+                known: self
+                    .doppler_sites
+                    .iter()
+                    .map(|x| x.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            });
+        };
+        let x = &self.doppler_sites[i];
+        let call = DopplerCall {
+            site: x.name.clone(),
+            vein: x.vein.clone(),
+            s: x.s,
+            finding,
+            truth: self.doppler_truth[i],
+            t,
+        };
+        log.doppler(&call)?;
+        self.doppler_calls.push(call);
+        Ok(self.doppler_calls.last().expect("just pushed"))
     }
 
     /// Ends the case at `t` (s): a press still under way is closed and
@@ -146,7 +204,7 @@ impl CaseExam {
         if let Some(e) = self.detector.finish(t) {
             self.keep_event(e, log)?;
         }
-        let score = score_case(&ScoreInput {
+        let mut score = score_case(&ScoreInput {
             case: &self.case,
             protocol: self.protocol,
             sites: &self.sites,
@@ -155,6 +213,11 @@ impl CaseExam {
             calls: &self.calls,
             coverage: &self.coverage,
         });
+        score.doppler = score_doppler(
+            &self.doppler_sites,
+            &self.doppler_truth,
+            &self.doppler_calls,
+        );
         log.finish(self.coverage.bins(), &score)?;
         Ok(score)
     }
@@ -192,6 +255,52 @@ impl CaseExam {
     /// The latest call at `site`, if any.
     pub fn call_at(&self, site: &str) -> Option<Finding> {
         self.calls
+            .iter()
+            .rev()
+            .find(|c| c.site == site)
+            .map(|c| c.finding)
+    }
+
+    /// What the presses at the protocol's site `site` showed, strongest
+    /// first (the coverage's precedence): walls met → normal; not met with
+    /// adequate pressure (artery deformed) → acute DVT (review §1
+    /// "Positive criterion"); pressed without adequate pressure →
+    /// indeterminate. A press counts for the site when it was over the
+    /// site's vein within half the site spacing (1 cm). `None` when no
+    /// press examined it, or no such site.
+    pub fn seen_at(&self, site: &str) -> Option<Finding> {
+        let x = self.sites.iter().find(|x| x.name == site)?;
+        let half = 0.5 * crate::protocol::WHOLE_LEG_SPACING + 1e-12;
+        self.events
+            .iter()
+            .filter(|e| e.vein.as_deref() == Some(x.vein.as_str()) && (e.s - x.s).abs() <= half)
+            .map(event_state)
+            .max_by_key(|s| match s {
+                BinState::NotExamined => 0,
+                BinState::InadequatePressure => 1,
+                BinState::NotClosed => 2,
+                BinState::Closed => 3,
+            })
+            .map(|s| match s {
+                BinState::Closed => Finding::Normal,
+                BinState::NotClosed => Finding::AcuteDvt,
+                _ => Finding::Indeterminate,
+            })
+    }
+
+    /// The Doppler sites (`cfv`, `popliteal`).
+    pub fn doppler_sites(&self) -> &[ProtocolSite] {
+        &self.doppler_sites
+    }
+
+    /// The Doppler calls so far.
+    pub fn doppler_calls(&self) -> &[DopplerCall] {
+        &self.doppler_calls
+    }
+
+    /// The latest Doppler call at `site`, if any.
+    pub fn doppler_at(&self, site: &str) -> Option<DopplerFinding> {
+        self.doppler_calls
             .iter()
             .rev()
             .find(|c| c.site == site)

@@ -202,3 +202,37 @@ fn a_malformed_sample_is_refused_naming_the_field() {
     assert!(err.contains("force"), "{err}");
     assert!(log.events.is_empty());
 }
+
+/// Doppler calls go to the log as they are made and are scored apart from
+/// the compression calls: on the popliteal case (PV occluded 300–400 mm)
+/// the CFV is phasic without augmentation and the popliteal absent; one
+/// right and one wrong Doppler call leave the compression score (no call:
+/// 0 of 2) as it was and give 1 of 2 Doppler calls right.
+#[test]
+fn doppler_calls_are_logged_and_scored_apart() {
+    use crate::{DopplerFinding, FlowPattern};
+    let c = case("popliteal-acute");
+    let mut x = CaseExam::new(&c, Protocol::ThreePoint);
+    let mut log = MemoryLog::default();
+    let names: Vec<&str> = x.doppler_sites().iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(names, ["cfv", "popliteal"]);
+    let f = |flow, augments| DopplerFinding { flow, augments };
+    x.call_doppler("cfv", f(FlowPattern::Phasic, false), 1.0, &mut log)
+        .unwrap();
+    x.call_doppler("popliteal", f(FlowPattern::Phasic, true), 2.0, &mut log)
+        .unwrap();
+    let err = x
+        .call_doppler("fv-mid", f(FlowPattern::Absent, false), 2.0, &mut log)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("no Doppler site `fv-mid`"), "{err}");
+    assert_eq!(log.doppler.len(), 2);
+    assert_eq!(
+        x.doppler_at("popliteal"),
+        Some(f(FlowPattern::Phasic, true))
+    );
+    assert_eq!(log.doppler[1].truth, f(FlowPattern::Absent, false));
+    let score = x.finish(3.0, &mut log).unwrap();
+    assert_eq!((score.calls_correct, score.calls_total), (0, 3));
+    assert_eq!((score.doppler.correct, score.doppler.total), (1, 2));
+}

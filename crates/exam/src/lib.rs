@@ -11,6 +11,7 @@
 pub mod case_exam;
 pub mod coverage;
 pub mod detector;
+pub mod doppler;
 mod finding;
 mod log;
 pub mod protocol;
@@ -20,6 +21,7 @@ pub mod score;
 pub use case_exam::{CaseExam, CaseExamError};
 pub use coverage::Coverage;
 pub use detector::{EventDetector, ExamSample};
+pub use doppler::{DopplerCall, DopplerFinding, DopplerScore, DopplerSiteScore, FlowPattern};
 pub use finding::Finding;
 pub use log::{ExamLog, LogError, MemoryLog};
 pub use protocol::{Protocol, ProtocolSite};

@@ -3,7 +3,7 @@
 //! as each event, call and score happens; `echothigh-records` implements it
 //! over the database, tests over a vector.
 
-use crate::{Call, CaseScore, CompressionEvent, CoverageBin};
+use crate::{Call, CaseScore, CompressionEvent, CoverageBin, DopplerCall};
 
 /// Why a record could not be kept (the sink says what and where).
 #[derive(Debug, thiserror::Error)]
@@ -16,6 +16,8 @@ pub trait ExamLog {
     fn event(&mut self, event: &CompressionEvent) -> Result<(), LogError>;
     /// The trainee made a call.
     fn call(&mut self, call: &Call) -> Result<(), LogError>;
+    /// The trainee made a Doppler call.
+    fn doppler(&mut self, call: &DopplerCall) -> Result<(), LogError>;
     /// The case is over: its coverage strip and score.
     fn finish(&mut self, coverage: &[CoverageBin], score: &CaseScore) -> Result<(), LogError>;
 }
@@ -28,6 +30,8 @@ pub struct MemoryLog {
     pub events: Vec<CompressionEvent>,
     /// Calls, in order.
     pub calls: Vec<Call>,
+    /// Doppler calls, in order.
+    pub doppler: Vec<DopplerCall>,
     /// The final coverage, once finished.
     pub coverage: Vec<CoverageBin>,
     /// The score, once finished.
@@ -41,6 +45,10 @@ impl ExamLog for MemoryLog {
     }
     fn call(&mut self, call: &Call) -> Result<(), LogError> {
         self.calls.push(call.clone());
+        Ok(())
+    }
+    fn doppler(&mut self, call: &DopplerCall) -> Result<(), LogError> {
+        self.doppler.push(call.clone());
         Ok(())
     }
     fn finish(&mut self, coverage: &[CoverageBin], score: &CaseScore) -> Result<(), LogError> {

@@ -2,7 +2,7 @@
 //! events, coverage bins, calls, and a case's score. Lengths in metres,
 //! forces in newtons, times in seconds since the case started.
 
-use crate::Finding;
+use crate::{DopplerScore, Finding};
 use serde::{Deserialize, Serialize};
 
 /// One press of the probe, detected from the live state (issue 14
@@ -155,6 +155,11 @@ pub struct CaseScore {
     /// scorer; absent in older records (empty).
     #[serde(default)]
     pub missed: Vec<MissedSegment>,
+    /// The Doppler calls' score (CFV and popliteal, `crate::doppler`),
+    /// counted apart from the compression calls above. Absent in older
+    /// records (empty).
+    #[serde(default)]
+    pub doppler: DopplerScore,
 }
 
 /// A thrombosed stretch of a deep vein the exam missed.

@@ -171,6 +171,8 @@ pub fn score_case(x: &ScoreInput) -> CaseScore {
         mean_force: if span > 0.0 { area / span } else { 0.0 },
         sites,
         missed: missed_segments(x),
+        // Scored by the caller that holds the Doppler calls (`CaseExam`).
+        doppler: Default::default(),
     }
 }
 

@@ -15,6 +15,7 @@
 
 use crate::anatomy_config::{AnatomyConfig, VeinState};
 use crate::error::ImagingError;
+use crate::post_thrombotic::WEB_THICKNESS;
 use crate::structure_config::StructureKind;
 use crate::tissue::Tissue;
 use crate::vein_condition::{ContentLayout, VeinCondition};
@@ -152,6 +153,51 @@ pub struct Anatomy {
     vessels: Vec<SectionVessel>,
     /// Muscle outlines and lymph nodes.
     others: Vec<(StructureKind, Vessel)>,
+}
+
+/// The tissue at `(u, depth)` inside the lumen of `sv` (its chord in this
+/// column centred at `centre`, half-height `h`): blood or content by the
+/// condition's layout, or, in a post-thrombotic vein, a web (drawn as the
+/// wall's fibrous tissue), a recanalized channel (blood) or the residual
+/// fibrous content ([`crate::post_thrombotic`]).
+fn lumen_tissue(sv: &SectionVessel, u: f64, depth: f64, centre: f64, h: f64) -> Tissue {
+    let Some(vc) = sv.condition() else {
+        return sv.tissues.0;
+    };
+    if let Some(pt) = &vc.post_thrombotic {
+        let v = &sv.vessel;
+        let (sn, cs) = v.angle.sin_cos();
+        let (du, dd) = (u - v.lateral, depth - v.depth);
+        let (x, y) = (
+            (du * cs + dd * sn) / v.radius,
+            (-du * sn + dd * cs) / v.radius_b,
+        );
+        let half = 0.5 * WEB_THICKNESS / v.radius_b;
+        return if pt.on_web(x, y, half) {
+            sv.tissues.1
+        } else if pt.in_channel(x, y, 1.0 - vc.fill, 2.0 * half) {
+            sv.tissues.0
+        } else {
+            Tissue::Thrombus
+        };
+    }
+    if vc.fill > 0.0 && vc.is_content((depth - centre) / h) {
+        Tissue::Thrombus
+    } else {
+        sv.tissues.0
+    }
+}
+
+/// Whether `(u, depth)` lies in the wall of `sv`: within its wall thickness
+/// of the lumen, the post-thrombotic wall's own at the point's polar angle
+/// around the centre ([`crate::post_thrombotic::PostThrombotic::wall_at`]).
+fn in_wall(sv: &SectionVessel, u: f64, depth: f64) -> bool {
+    let v = &sv.vessel;
+    let wall = match sv.condition().and_then(|c| c.post_thrombotic.as_ref()) {
+        Some(pt) => pt.wall_at(v.wall, (depth - v.depth).atan2(u - v.lateral)),
+        None => v.wall,
+    };
+    v.contains(u, depth, wall)
 }
 
 /// Smooth step `3t² − 2t³` of `t` clamped to [0, 1].
@@ -310,22 +356,10 @@ impl Anatomy {
         for (i, sv) in self.vessels.iter().enumerate() {
             let (centre, h) = sv.vessel.chord(u, 0.0);
             if (depth - centre).abs() < h {
-                let content = sv
-                    .condition()
-                    .is_some_and(|vc| vc.fill > 0.0 && vc.is_content((depth - centre) / h));
-                let t = if content {
-                    Tissue::Thrombus
-                } else {
-                    sv.tissues.0
-                };
-                return (t, Some(i));
+                return (lumen_tissue(sv, u, depth, centre, h), Some(i));
             }
         }
-        if let Some(i) = self
-            .vessels
-            .iter()
-            .position(|x| x.vessel.contains(u, depth, x.vessel.wall))
-        {
+        if let Some(i) = self.vessels.iter().position(|x| in_wall(x, u, depth)) {
             return (self.vessels[i].tissues.1, Some(i));
         }
         (self.tissue_outside_vessels(u, depth), None)

@@ -141,13 +141,15 @@ impl VeinStateParams {
             min_lumen_ratio: 0.8,
         }
     }
-    /// Chronic thrombus: retracted, echogenic, 1.5 mm wall, rigid.
+    /// Chronic thrombus: retracted, echogenic, 1.5 mm wall, rigid. The
+    /// wall is fibrous: +12 dB re muscle, the echo of fascia (derived; see
+    /// `crate::post_thrombotic` for its thickness and irregularity).
     pub fn chronic() -> Self {
         VeinStateParams {
             diameter_factor: 0.85,
             wall_thickness: 1.5e-3,
             content_echo: -14.0,
-            wall_echo: 9.0,
+            wall_echo: 12.0,
             content_attenuation: 0.5,
             collapse_onset: 60.0 * MMHG,
             collapse_full: 250.0 * MMHG,
@@ -371,6 +373,20 @@ impl AnatomyConfig {
         self.skin_thickness + self.fat_thickness + self.muscle_thickness
     }
 
+    /// Whether a vessel of outer radius `r` (m) centred at `(lateral,
+    /// depth)` (m) lies under the skin and outside the femur's disc. The
+    /// renderer draws lumens and walls before the layers, so a vessel may
+    /// cross the fascia into the fat (the common femoral vessels lie just
+    /// under the fascia lata, and thick fat in the obese groin reaches
+    /// their level) and may lie beside the femur deeper than its top (the
+    /// popliteal vessels beside the condyles; the column compression of
+    /// [`crate::deformation`] stops at the femur's depth either way).
+    pub fn vessel_fits(&self, lateral: f64, depth: f64, r: f64) -> bool {
+        let fc = self.femur_top() + self.femur_radius;
+        let apart = (lateral - self.femur_lateral).hypot(depth - fc);
+        depth - r > self.skin_thickness && apart > self.femur_radius + r
+    }
+
     /// Checks every field, naming the offending key as `"{prefix}.{field}"`.
     pub fn validate(&self, prefix: &str) -> Result<(), ImagingError> {
         let p = prefix;
@@ -558,11 +574,9 @@ impl AnatomyConfig {
         if let Some(vc) = &self.vein_condition {
             vc.validate(&format!("{p}.vein_condition"))?;
             // A distended vein may bulge into the fat (lumens are drawn
-            // first), but must stay under the skin and above the femur.
+            // first), but must stay under the skin and clear of the femur.
             let r = 0.5 * self.vein_diameter * vc.diameter_factor + vc.wall_thickness;
-            if !(self.vein_depth - r > self.skin_thickness
-                && self.vein_depth + r < self.femur_top())
-            {
+            if !self.vessel_fits(self.vein_lateral, self.vein_depth, r) {
                 return Err(ImagingError::invalid(
                     p,
                     "vein_condition.diameter_factor",
@@ -571,7 +585,8 @@ impl AnatomyConfig {
                 ));
             }
         }
-        // Vessels (largest state) must sit inside the muscle layer.
+        // Vessels (largest state) must sit under the skin and clear of the
+        // femur (`vessel_fits`).
         let vein_r = 0.5
             * self.vein_diameter
             * VeinState::ALL
@@ -588,12 +603,17 @@ impl AnatomyConfig {
             ("vein_depth", self.vein_depth, vein_r),
             ("artery_depth", self.artery_depth, art_r),
         ] {
-            if !(depth - r > muscle_top && depth + r < femur_top) {
+            let lateral = if field == "vein_depth" {
+                self.vein_lateral
+            } else {
+                self.artery_lateral
+            };
+            if !self.vessel_fits(lateral, depth, r) {
                 return Err(ImagingError::invalid(
                     p,
                     field,
                     depth,
-                    "the vessel (with its wall) must lie inside the muscle layer",
+                    "the vessel (with its wall) must lie under the skin and clear of the femur",
                 ));
             }
         }

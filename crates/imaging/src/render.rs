@@ -135,6 +135,9 @@ pub struct Renderer {
     iq: Vec<[f32; 2]>,
     gray: Vec<u8>,
     geometry: FrameGeometry,
+    /// Factor on the studied vein's (vessel 0's) lumen height: its
+    /// Valsalva distension (issue 17), 1 at rest.
+    vein_distension: f64,
 }
 
 impl Renderer {
@@ -317,6 +320,7 @@ impl Renderer {
             iq: vec![[0.0; 2]; cfg.columns * cfg.rows],
             gray: vec![0; cfg.columns * cfg.rows],
             field,
+            vein_distension: 1.0,
         }
     }
 
@@ -402,6 +406,28 @@ impl Renderer {
         }
     }
 
+    /// Sets the studied vein's (vessel 0's) distension: its lumen's height
+    /// drawn `factor` times its law's (the rise of the vein's
+    /// antero-posterior diameter during a Valsalva strain, issue 17; the
+    /// lumen reports follow). Clamped to 1–4 (a diameter up to +300 %, the
+    /// flow model's accepted range); a non-finite factor is 1.
+    pub fn set_vein_distension(&mut self, factor: f64) {
+        self.vein_distension = if factor.is_finite() {
+            factor.clamp(1.0, 4.0)
+        } else {
+            1.0
+        };
+    }
+
+    /// The distension factor of vessel `i` (the studied vein's, else 1).
+    fn distension_of(&self, i: usize) -> f64 {
+        if i == 0 {
+            self.vein_distension
+        } else {
+            1.0
+        }
+    }
+
     /// The vein's and artery's lumens for `input` (`None` for a phantom).
     /// Lumen areas follow [`Anatomy::vein_lumen_area`] and
     /// [`Anatomy::artery_lumen_area`] at the tissue pressure that reaches
@@ -413,7 +439,9 @@ impl Renderer {
         };
         let face = input.deformation.face_depth(0.5 * self.cfg.width);
         Ok(Some(LumenReport {
-            vein: self.lumen_of(a.vein(), input, face, |p| a.vein_lumen_ratio(p)),
+            vein: self.lumen_of(a.vein(), input, face, |p| {
+                a.vein_lumen_ratio(p) * self.vein_distension
+            }),
             artery: self.lumen_of(a.artery(), input, face, |p| {
                 a.artery_lumen_ratio(p, input.time)
             }),
@@ -437,7 +465,7 @@ impl Renderer {
         };
         let face = input.deformation.face_depth(0.5 * self.cfg.width);
         Ok(Some(self.lumen_of(&sv.vessel, input, face, |p| {
-            a.lumen_ratio(i, p, input.time)
+            a.lumen_ratio(i, p, input.time) * self.distension_of(i)
         })))
     }
 
@@ -460,7 +488,7 @@ impl Renderer {
                 for (i, r) in ratios.iter_mut().enumerate().take(vs.len()) {
                     *r = self
                         .lumen_of(&vs[i].vessel, input, face, |p| {
-                            a.lumen_ratio(i, p, input.time)
+                            a.lumen_ratio(i, p, input.time) * self.distension_of(i)
                         })
                         .area
                         / vs[i].vessel.rest_area();
@@ -477,11 +505,13 @@ impl Renderer {
             set.clear();
             if let Some(a) = &self.anatomy {
                 for (sv, &r) in a.vessels().iter().zip(&ratios[..n]) {
-                    set.push(VesselWarp::new(
-                        &sv.vessel,
-                        u,
-                        compensated_ratio(r, s, def.bone_depth),
-                    ));
+                    let mut w =
+                        VesselWarp::new(&sv.vessel, u, compensated_ratio(r, s, def.bone_depth));
+                    if let Some(c) = sv.condition() {
+                        // A floating tail sways with breathing (issue 13).
+                        w = w.with_tail(c.fill, c.tail_shift(input.time));
+                    }
+                    set.push(w);
                 }
             }
         }

@@ -17,6 +17,7 @@
 
 use crate::anatomy_config::{VeinState, VeinStateParams};
 use crate::error::ImagingError;
+use crate::post_thrombotic::PostThrombotic;
 use serde::{Deserialize, Serialize};
 
 /// Where the content sits in the lumen.
@@ -111,7 +112,31 @@ pub struct VeinCondition {
     pub content_law: CollapseLaw,
     /// Law of the open (blood) part.
     pub open_law: CollapseLaw,
+    /// Chronic post-thrombotic change as drawn: irregular wall, webs and
+    /// recanalized channels ([`PostThrombotic`]); `None` draws the content
+    /// by `layout`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub post_thrombotic: Option<PostThrombotic>,
+    /// Relative sway of a free-floating tail here, in [0, 1] (0: none, 1:
+    /// at its free tip): with breathing, the central content moves across
+    /// the lumen ([`VeinCondition::tail_shift`]).
+    #[serde(default)]
+    pub sway: f64,
 }
+
+/// Breathing rate (Hz): 0.25, 15 breaths per minute, the middle of the
+/// adult resting range of 12–20 per minute (e.g. StatPearls, "Physiology,
+/// Respiratory Rate").
+pub const BREATHING_RATE: f64 = 0.25;
+
+/// Fraction of the free gap between a floating tail and the wall over
+/// which its free tip swings with breathing: 0.5. Derivation: free-floating
+/// thrombi are seen to move with respiration inside the lumen without
+/// striking the wall (abcvascular.com, "free-floating distal thrombus
+/// tongue", the reference's row 25); no measured amplitude was found, so
+/// the tip swings half-way to the wall on each side (≈ 2 mm in a 12 mm
+/// distended CFV with a tail filling 35 % of each chord).
+pub const TAIL_SWING: f64 = 0.5;
 
 impl VeinCondition {
     /// The condition of a vein in a global [`VeinState`] (the simple case: one
@@ -136,7 +161,23 @@ impl VeinCondition {
             content_attenuation: params.content_attenuation,
             content_law: CollapseLaw::of(params),
             open_law: CollapseLaw::of(healthy),
+            post_thrombotic: None,
+            sway: 0.0,
         }
+    }
+
+    /// Shift of a free-floating tail at time `time` (s), as a fraction of
+    /// the lumen's half-height in each column (positive deeper):
+    /// `sway · TAIL_SWING · (1 − fill) · sin(2π f_b t)`, `f_b` the
+    /// [`BREATHING_RATE`]; `(1 − fill) h` is the free gap between a central
+    /// content of `fill` of the chord and the wall. 0 unless the content
+    /// is central (a floating tail).
+    pub fn tail_shift(&self, time: f64) -> f64 {
+        if self.layout != ContentLayout::Central || self.fill <= 0.0 || !time.is_finite() {
+            return 0.0;
+        }
+        let phase = (time * BREATHING_RATE).rem_euclid(1.0);
+        self.sway * TAIL_SWING * (1.0 - self.fill) * (std::f64::consts::TAU * phase).sin()
     }
 
     /// A healthy vein (the healthy defaults of [`VeinStateParams::healthy`]).
@@ -207,6 +248,10 @@ impl VeinCondition {
             5.0,
             "must be between 0 and 5 dB/(cm MHz)",
         )?;
+        ImagingError::in_range(prefix, "sway", self.sway, 0.0, 1.0, "must be in [0, 1]")?;
+        if let Some(pt) = &self.post_thrombotic {
+            pt.validate(&format!("{prefix}.post_thrombotic"))?;
+        }
         self.content_law
             .validate(&format!("{prefix}.content_law"))?;
         self.open_law.validate(&format!("{prefix}.open_law"))

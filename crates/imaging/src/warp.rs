@@ -36,6 +36,10 @@ pub struct VesselWarp {
     decay: f64,
     lo: f64,
     hi: f64,
+    /// Half-height of a central content band (m; 0: none).
+    band: f64,
+    /// Displacement of that band within the lumen (m).
+    band_shift: f64,
 }
 
 impl VesselWarp {
@@ -53,13 +57,46 @@ impl VesselWarp {
             decay,
             lo: centre - h - decay,
             hi: centre + h,
+            band: 0.0,
+            band_shift: 0.0,
+        }
+    }
+
+    /// This warp with a central content band of `fill` of the chord (a
+    /// floating tail, `|η| < fill h`) moved by `shift · h` within the
+    /// lumen before the collapse: the piecewise-linear map of the chord
+    /// through `(−h, −h)`, `(∓b, ∓b + δ)`, `(h, h)` (`b = fill h`,
+    /// `δ = shift h`), which keeps the band's shape, squeezes the blood on
+    /// one side and stretches it on the other, and stays increasing while
+    /// `|δ| < h − b` (`shift` is clamped to 0.95 of that).
+    pub fn with_tail(mut self, fill: f64, shift: f64) -> Self {
+        let h = self.half_height;
+        if h <= 0.0 || fill <= 0.0 || fill >= 1.0 || shift == 0.0 {
+            return self;
+        }
+        let room = 0.95 * (1.0 - fill);
+        self.band = fill * h;
+        self.band_shift = shift.clamp(-room, room) * h;
+        self
+    }
+
+    /// The tail's map of the chord coordinate `eta` (m, |eta| ≤ h).
+    #[inline]
+    fn tail_map(&self, eta: f64) -> f64 {
+        let (h, b, d) = (self.half_height, self.band, self.band_shift);
+        if eta < -b {
+            -h + (eta + h) * (h - b + d) / (h - b)
+        } else if eta <= b {
+            eta + d
+        } else {
+            h - (h - eta) * (h - b - d) / (h - b)
         }
     }
 
     /// Whether the warp moves anything in this column.
     #[inline]
     pub fn is_active(&self) -> bool {
-        self.half_height > 0.0 && self.shift != 0.0
+        self.half_height > 0.0 && (self.shift != 0.0 || self.band_shift != 0.0)
     }
 
     /// The warped depth (m) of the tissue point at depth `depth` (m).
@@ -69,7 +106,10 @@ impl VesselWarp {
             return depth;
         }
         let h = self.half_height;
-        let eta = depth - self.centre;
+        let mut eta = depth - self.centre;
+        if self.band_shift != 0.0 && eta.abs() <= h {
+            eta = self.tail_map(eta);
+        }
         if eta >= -h {
             self.centre + h - self.ratio * (h - eta)
         } else {
@@ -142,6 +182,30 @@ mod tests {
             assert_eq!(w.apply(0.04), 0.04);
             if ratio <= 1.6 {
                 assert_eq!(w.apply(0.015), 0.015);
+            }
+        }
+    }
+
+    #[test]
+    fn tail_band_moves_whole_and_map_stays_increasing() {
+        let v = vessel();
+        let h = v.radius;
+        for shift in [-0.3, 0.2, 0.5] {
+            let w = VesselWarp::new(&v, 0.0, 1.0).with_tail(0.35, shift);
+            assert!(w.is_active());
+            // The band |η| < 0.35 h moves by shift·h as a block.
+            for eta in [-0.3 * h, 0.0, 0.3 * h] {
+                let y = w.apply(v.depth + eta);
+                assert!((y - (v.depth + eta + shift * h)).abs() < 1e-15);
+            }
+            // The walls stay; the map is increasing across the lumen.
+            assert!((w.apply(v.depth - h) - (v.depth - h)).abs() < 1e-15);
+            assert!((w.apply(v.depth + h) - (v.depth + h)).abs() < 1e-15);
+            let mut last = f64::NEG_INFINITY;
+            for i in 0..=1000 {
+                let y = w.apply(v.depth - h + 2.0 * h * i as f64 / 1000.0);
+                assert!(y > last);
+                last = y;
             }
         }
     }

@@ -12,7 +12,9 @@ use crate::{
     CaseDetail, CaseId, RecordsError, SessionId, SiteStats, Store, Trainee, TraineeHistory,
     TraineeSummary, TruthSegment,
 };
-use echothigh_exam::{Call, CaseScore, CompressionEvent, CoverageBin, ExamLog, LogError};
+use echothigh_exam::{
+    Call, CaseScore, CompressionEvent, CoverageBin, DopplerCall, ExamLog, LogError,
+};
 use std::future::Future;
 use std::pin::Pin;
 use std::sync::{mpsc, Arc, Mutex};
@@ -179,6 +181,7 @@ impl BlockingStore {
             case: id,
             events: 0,
             calls: 0,
+            doppler: 0,
         })
     }
 }
@@ -218,6 +221,7 @@ pub struct CaseRecorder {
     case: CaseId,
     events: u32,
     calls: u32,
+    doppler: u32,
 }
 
 impl CaseRecorder {
@@ -246,6 +250,16 @@ impl CaseRecorder {
         Ok(id)
     }
 
+    /// Stores a Doppler call; returns its row id once committed.
+    pub fn record_doppler(&mut self, c: &DopplerCall) -> Result<i64, RecordsError> {
+        let (case, seq, c) = (self.case, self.doppler, c.clone());
+        let id = self
+            .store
+            .run(move |s| async move { s.record_doppler(case, seq, &c).await })?;
+        self.doppler += 1;
+        Ok(id)
+    }
+
     /// Stores the coverage and score (one transaction).
     pub fn record_finish(
         &mut self,
@@ -266,6 +280,11 @@ impl ExamLog for CaseRecorder {
     }
     fn call(&mut self, call: &Call) -> Result<(), LogError> {
         self.record_call(call)
+            .map(drop)
+            .map_err(|e| LogError(e.to_string()))
+    }
+    fn doppler(&mut self, call: &DopplerCall) -> Result<(), LogError> {
+        self.record_doppler(call)
             .map(drop)
             .map_err(|e| LogError(e.to_string()))
     }

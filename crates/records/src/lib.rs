@@ -21,6 +21,8 @@
 #![warn(missing_docs)]
 
 mod blocking;
+pub mod breakdown;
+mod doppler;
 mod error;
 mod read;
 pub mod schema;

@@ -6,7 +6,7 @@
 use crate::stats::{by_site, CaseOutcome, Confusion, Rates};
 use crate::{RecordsError, Store, TruthSegment};
 use echothigh_exam::{
-    BinState, Call, CaseScore, CompressionEvent, CoverageBin, Finding, SiteScore,
+    BinState, Call, CaseScore, CompressionEvent, CoverageBin, DopplerCall, Finding, SiteScore,
 };
 use serde::Serialize;
 use sqlx::any::AnyRow;
@@ -94,6 +94,10 @@ pub struct TraineeHistory {
     pub rates: Rates,
     /// Per site, over every finished case.
     pub sites: Vec<SiteStats>,
+    /// The diseased segments the finished cases missed.
+    pub missed: Vec<crate::breakdown::MissedInCase>,
+    /// Doppler accuracy per Doppler site, over every finished case.
+    pub doppler: Vec<crate::breakdown::DopplerAccuracy>,
 }
 
 /// One row of the instructor's page.
@@ -124,6 +128,8 @@ pub struct CaseDetail {
     pub events: Vec<CompressionEvent>,
     /// Calls, in order.
     pub calls: Vec<Call>,
+    /// Doppler calls, in order.
+    pub doppler_calls: Vec<DopplerCall>,
     /// The coverage strip (empty until finished).
     pub coverage: Vec<CoverageBin>,
     /// The score, once finished.
@@ -329,6 +335,8 @@ impl Store {
             sessions,
             rates: Rates::of(all.iter().copied()),
             sites: site_stats(&all),
+            missed: self.missed_of(t.id).await?,
+            doppler: self.doppler_of(t.id).await?,
         })
     }
 
@@ -500,6 +508,24 @@ impl Store {
                 called_without_adequate_pressure: self.get::<i64>(&r, 5)? != 0,
             });
         }
+        let doppler_calls = self.doppler_calls(id).await?;
+        let doppler = match &numbers {
+            Some(_) => {
+                let sql = "SELECT doppler_correct, doppler_total FROM case_attempts WHERE id = $1";
+                let counts = match self.rows(sql.into(), Some(id)).await?.first() {
+                    Some(r) => match (
+                        self.get::<Option<i64>>(r, 0)?,
+                        self.get::<Option<i64>>(r, 1)?,
+                    ) {
+                        (Some(c), Some(t)) => Some((u32_of(c), u32_of(t))),
+                        _ => None,
+                    },
+                    None => None,
+                };
+                self.doppler_score(id, counts).await?
+            }
+            None => Default::default(),
+        };
         let missed = match &numbers {
             Some(_) => {
                 let sql = "SELECT missed FROM case_attempts WHERE id = $1";
@@ -528,6 +554,7 @@ impl Store {
             mean_force: n.mean_force,
             sites,
             missed,
+            doppler,
         });
         Ok(CaseDetail {
             id,
@@ -535,6 +562,7 @@ impl Store {
             truth,
             events,
             calls,
+            doppler_calls,
             coverage,
             score,
         })

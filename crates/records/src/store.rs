@@ -380,8 +380,8 @@ impl Store {
         .map_err(self.err("storing a call"))
     }
 
-    /// Stores the end of `case`: its coverage strip, its score and its
-    /// sites, in one transaction (all or nothing).
+    /// Stores the end of `case`: its coverage strip, its score, its sites
+    /// and its Doppler score, in one transaction (all or nothing).
     pub async fn finish_case(
         &self,
         case: CaseId,
@@ -420,10 +420,13 @@ impl Store {
             .await
             .map_err(self.err(doing))?;
         }
+        self.insert_doppler_sites(&mut tx, case.0, &score.doppler)
+            .await?;
         sqlx::query(
             "UPDATE case_attempts SET finished_ms = $1, protocol = $2, coverage = $3, calls_correct = $4, \
              calls_total = $5, pressure_adequate = $6, excessive_force_on_tail = $7, duration = $8, \
-             peak_force = $9, mean_force = $10, missed = $11 WHERE id = $12",
+             peak_force = $9, mean_force = $10, missed = $11, doppler_correct = $12, doppler_total = $13 \
+             WHERE id = $14",
         )
         .bind(now_ms())
         .bind(&score.protocol)
@@ -441,6 +444,8 @@ impl Store {
             id: case.0,
             why: format!("missed segments not representable as JSON: {err}"),
         })?)
+        .bind(i64::from(score.doppler.correct))
+        .bind(i64::from(score.doppler.total))
         .bind(case.0)
         .execute(&mut *tx)
         .await

@@ -5,7 +5,8 @@
 mod common;
 
 use echothigh_exam::{
-    BinState, Call, CaseScore, CompressionEvent, CoverageBin, ExamLog, Finding, SiteScore,
+    BinState, Call, CaseScore, CompressionEvent, CoverageBin, DopplerCall, DopplerFinding,
+    DopplerScore, DopplerSiteScore, ExamLog, Finding, FlowPattern, SiteScore,
 };
 use echothigh_records::{BlockingStore, RecordsError, TruthSegment};
 
@@ -70,6 +71,32 @@ fn score(case: &str) -> CaseScore {
             s_end: 0.2300000000000001,
             truth: Finding::AcuteDvt,
         }],
+        // A called site and an uncalled one (NULL columns).
+        doppler: DopplerScore {
+            correct: 1,
+            total: 2,
+            sites: vec![
+                DopplerSiteScore {
+                    site: "cfv".into(),
+                    call: Some(DopplerFinding {
+                        flow: FlowPattern::Continuous,
+                        augments: true,
+                    }),
+                    truth: DopplerFinding {
+                        flow: FlowPattern::Continuous,
+                        augments: true,
+                    },
+                },
+                DopplerSiteScore {
+                    site: "popliteal".into(),
+                    call: None,
+                    truth: DopplerFinding {
+                        flow: FlowPattern::Absent,
+                        augments: false,
+                    },
+                },
+            ],
+        },
     }
 }
 
@@ -118,6 +145,26 @@ fn every_type_round_trips_on_every_backend() {
         for c in &calls {
             rec.call(c).unwrap();
         }
+        // Every pattern with and without augmentation, truth shifted by one.
+        let doppler: Vec<_> = FlowPattern::ALL
+            .iter()
+            .flat_map(|&flow| [false, true].map(|augments| DopplerFinding { flow, augments }))
+            .enumerate()
+            .map(|(i, finding)| DopplerCall {
+                site: if i % 2 == 0 { "cfv" } else { "popliteal" }.into(),
+                vein: "cfv".into(),
+                s: 0.03 + i as f64 / 9.0,
+                finding,
+                truth: DopplerFinding {
+                    flow: FlowPattern::ALL[(i + 1) % 3],
+                    augments: i % 3 == 0,
+                },
+                t: 20.0 + i as f64 / 11.0,
+            })
+            .collect();
+        for c in &doppler {
+            rec.doppler(c).unwrap();
+        }
         let states = [
             BinState::NotExamined,
             BinState::InadequatePressure,
@@ -143,6 +190,7 @@ fn every_type_round_trips_on_every_backend() {
         assert_eq!(d.truth, truth, "{}", db.kind);
         assert_eq!(d.events, events, "{}", db.kind);
         assert_eq!(d.calls, calls, "{}", db.kind);
+        assert_eq!(d.doppler_calls, doppler, "{}", db.kind);
         assert_eq!(d.coverage, coverage, "{}", db.kind);
         assert_eq!(d.score.as_ref(), Some(&sc), "{}", db.kind);
 

@@ -87,6 +87,7 @@ fn case(
             })
             .collect(),
         missed: Vec::new(),
+        doppler: Default::default(),
     };
     rec.finish(&[], &score).unwrap();
 }

@@ -2,7 +2,8 @@
 //! simulated hand walks the probe site to site over the case patient's
 //! leg, normal to the skin over the vein at each site (as
 //! [`crate::exam_site`] places it), presses, holds, releases and makes its
-//! calls, while the [`EventDetector`] turns the live state into compression
+//! calls, while the case's [`CaseExam`](echothigh_exam::CaseExam) (the viewer's bookkeeping: event
+//! detector, coverage, calls, score) turns the live state into compression
 //! events. Every tick is the one haptic tick of `run`
 //! ([`crate::virtual_clock::VirtualRun`]: physics, link, buffer model,
 //! device and hand on the scenario's rates).
@@ -33,14 +34,9 @@ use crate::exam_walk::Walker;
 pub use crate::exam_walk::{END_MARGIN, LOOK_RATE, SETTLE};
 use crate::scenario::Scenario;
 use anyhow::{Context, Result};
-use echothigh_anatomy::{Patient, VeinTruth};
+use echothigh_anatomy::Patient;
 use echothigh_cases::Case;
-use echothigh_exam::coverage::event_state;
-use echothigh_exam::score::truth_for_call;
-use echothigh_exam::{
-    score_case, BinState, Call, CaseScore, CompressionEvent, ExamLog, Finding, ProtocolSite,
-    ScoreInput,
-};
+use echothigh_exam::{CaseScore, ExamLog, Finding, ProtocolSite};
 
 /// What a walk did, besides what went to the log.
 #[derive(Debug, Clone, PartialEq)]
@@ -86,21 +82,21 @@ pub fn exam_scenario(case: &Case) -> Result<Scenario> {
 }
 
 /// Runs `script` on `case`, sending events, calls and the score to `log` as
-/// they happen. Errors name the script's key, the site, or the physics'
+/// they happen (the bookkeeping is the viewer's: one [`CaseExam`](echothigh_exam::CaseExam) fed by
+/// the walk). Errors name the script's key, the site, or the physics'
 /// failure.
 pub fn run_exam(script: &TraineeScript, case: &Case, log: &mut dyn ExamLog) -> Result<ExamOutcome> {
     let scenario = exam_scenario(case)?;
-    let protocol = script.protocol();
-    let sites = protocol.sites(&case.anatomy);
+    let sites = script.protocol().sites(&case.anatomy);
     let names: Vec<&str> = sites.iter().map(|x| x.name.as_str()).collect();
     script.check_sites(&names)?;
-    let mut w = Walker::new(&scenario, script, case)?;
-    let truth = case.ground_truth();
+    let doppler = echothigh_exam::doppler::doppler_sites(&case.anatomy);
+    let names: Vec<&str> = doppler.iter().map(|x| x.name.as_str()).collect();
+    script.check_doppler_sites(&names)?;
+    let mut w = Walker::new(&scenario, script, case, log)?;
     let mut pressed = Vec::new();
     let mut unexaminable = Vec::new();
-    let mut calls = Vec::new();
     for site in sites.iter().filter(|x| !script.skip.contains(&x.name)) {
-        let first = w.events.len();
         let pressed_at = w.press_site(site, case).with_context(|| {
             format!(
                 "pressing site {} ({} at {:.0} mm)",
@@ -117,45 +113,25 @@ pub fn run_exam(script: &TraineeScript, case: &Case, log: &mut dyn ExamLog) -> R
             }
         };
         pressed.push((site.clone(), s_phys));
-        for e in &w.events[first..] {
-            log.event(e).map_err(|e| anyhow::anyhow!("exam log: {e}"))?;
-        }
         if script.calls == CallPolicy::Honest {
-            if let Some(finding) = honest_call(&w.events, site) {
-                let call = make_call(site, finding, &truth, w.run.time());
-                log.call(&call)
-                    .map_err(|e| anyhow::anyhow!("exam log: {e}"))?;
-                calls.push(call);
+            if let Some(finding) = w.exam.seen_at(&site.name) {
+                let t = w.run.time();
+                w.exam.call(&site.name, finding, t, &mut *w.log)?;
             }
         }
     }
-    if let Some(e) = w.detector.finish(w.run.time()) {
-        w.coverage.apply(&e);
-        log.event(&e)
-            .map_err(|e| anyhow::anyhow!("exam log: {e}"))?;
-        w.events.push(e);
-    }
+    let t = w.run.time();
     if script.calls == CallPolicy::Scripted {
         for c in &script.call {
-            let site = sites.iter().find(|x| x.name == c.site).expect("checked");
             let finding = Finding::from_name(&c.finding).expect("validated");
-            let call = make_call(site, finding, &truth, w.run.time());
-            log.call(&call)
-                .map_err(|e| anyhow::anyhow!("exam log: {e}"))?;
-            calls.push(call);
+            w.exam.call(&c.site, finding, t, &mut *w.log)?;
         }
     }
-    let score = score_case(&ScoreInput {
-        case: case.name(),
-        protocol,
-        sites: &sites,
-        truth: &truth,
-        events: &w.events,
-        calls: &calls,
-        coverage: &w.coverage,
-    });
-    log.finish(w.coverage.bins(), &score)
-        .map_err(|e| anyhow::anyhow!("exam log: {e}"))?;
+    for d in &script.doppler {
+        let finding = d.finding().expect("validated");
+        w.exam.call_doppler(&d.site, finding, t, &mut *w.log)?;
+    }
+    let score = w.exam.finish(t, &mut *w.log)?;
     Ok(ExamOutcome {
         score,
         virtual_time: w.run.time(),
@@ -164,38 +140,4 @@ pub fn run_exam(script: &TraineeScript, case: &Case, log: &mut dyn ExamLog) -> R
         unexaminable,
         looks: w.looks,
     })
-}
-
-/// The honest call at `site` from the presses there (within 1 cm, on its
-/// vein), strongest first: closed → normal, not closed with adequate
-/// pressure → acute DVT, else indeterminate; `None` when not pressed.
-pub fn honest_call(events: &[CompressionEvent], site: &ProtocolSite) -> Option<Finding> {
-    events
-        .iter()
-        .filter(|e| e.vein.as_deref() == Some(site.vein.as_str()) && (e.s - site.s).abs() <= 0.01)
-        .map(event_state)
-        .max_by_key(|s| match s {
-            BinState::NotExamined => 0,
-            BinState::InadequatePressure => 1,
-            BinState::NotClosed => 2,
-            BinState::Closed => 3,
-        })
-        .map(|s| match s {
-            BinState::Closed => Finding::Normal,
-            BinState::NotClosed => Finding::AcuteDvt,
-            _ => Finding::Indeterminate,
-        })
-}
-
-/// A call at `site` at time `t` (s), with the truth it is scored against
-/// ([`truth_for_call`]).
-fn make_call(site: &ProtocolSite, finding: Finding, truth: &[VeinTruth], t: f64) -> Call {
-    Call {
-        site: site.name.clone(),
-        vein: site.vein.clone(),
-        s: site.s,
-        finding,
-        truth: truth_for_call(truth, &site.vein, site.s, Some(finding)),
-        t,
-    }
 }

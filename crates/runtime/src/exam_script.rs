@@ -17,7 +17,16 @@
 //! [[call]]                   # calls = "scripted": one per site
 //! site = "cfv"
 //! finding = "normal"         # normal | acute_dvt | chronic_post_thrombotic | indeterminate
+//!
+//! [[doppler]]                # optional, any call policy: Doppler calls
+//! site = "cfv"               # cfv | popliteal (`echothigh_exam::doppler`)
+//! flow = "phasic"            # phasic | continuous | absent
+//! augments = true            # the flow rises on a calf squeeze
 //! ```
+//!
+//! `[[doppler]]` is optional (scripts written before it load unchanged):
+//! the scripted hand hears no spectrum, so its Doppler calls are the
+//! script's, made at the end of the walk.
 //!
 //! **Honest calls** (review §1 "Positive criterion"): from the presses at
 //! the site (within 1 cm, on its vein): walls met → `normal`; not met with
@@ -25,7 +34,7 @@
 //! adequate pressure → `indeterminate`. A site not pressed gets no call.
 
 use anyhow::{bail, Context, Result};
-use echothigh_exam::{Finding, Protocol};
+use echothigh_exam::{DopplerFinding, Finding, FlowPattern, Protocol};
 use serde::{Deserialize, Serialize};
 
 /// How the trainee presses.
@@ -95,6 +104,29 @@ pub struct ScriptedCall {
     pub finding: String,
 }
 
+/// One scripted Doppler call (`[[doppler]]`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScriptedDoppler {
+    /// The Doppler site's name (`cfv`, `popliteal`).
+    pub site: String,
+    /// `phasic`, `continuous` or `absent`.
+    pub flow: String,
+    /// The flow augments on a calf squeeze.
+    pub augments: bool,
+}
+
+impl ScriptedDoppler {
+    /// The call's finding (the flow name validated by
+    /// [`TraineeScript::validate`]).
+    pub fn finding(&self) -> Option<DopplerFinding> {
+        Some(DopplerFinding {
+            flow: FlowPattern::from_name(&self.flow)?,
+            augments: self.augments,
+        })
+    }
+}
+
 /// A scripted trainee's script.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -113,6 +145,9 @@ pub struct TraineeScript {
     /// The scripted calls (`calls = "scripted"`).
     #[serde(default)]
     pub call: Vec<ScriptedCall>,
+    /// Doppler calls (optional).
+    #[serde(default)]
+    pub doppler: Vec<ScriptedDoppler>,
 }
 
 fn honest() -> CallPolicy {
@@ -172,11 +207,34 @@ impl TraineeScript {
                 );
             }
         }
+        for (i, d) in self.doppler.iter().enumerate() {
+            if d.finding().is_none() {
+                bail!(
+                    "doppler[{i}].flow = {:?}: unknown (phasic, continuous, absent)",
+                    d.flow
+                );
+            }
+        }
         if self.calls == CallPolicy::Scripted && self.call.is_empty() {
             bail!("calls = \"scripted\" needs [[call]] entries (site, finding)");
         }
         if self.calls == CallPolicy::Honest && !self.call.is_empty() {
             bail!("call: [[call]] entries need calls = \"scripted\" (calls is \"honest\")");
+        }
+        Ok(())
+    }
+
+    /// Checks the site names of `[[doppler]]` against the Doppler sites
+    /// `names`.
+    pub fn check_doppler_sites(&self, names: &[&str]) -> Result<()> {
+        for (i, d) in self.doppler.iter().enumerate() {
+            if !names.contains(&d.site.as_str()) {
+                bail!(
+                    "doppler[{i}].site = {:?}: not a Doppler site ({})",
+                    d.site,
+                    list(names)
+                );
+            }
         }
         Ok(())
     }
@@ -241,6 +299,21 @@ mod tests {
         assert!(e.contains("force") && e.contains("unknown field"), "{e}");
         let e = err("protocol = \"two-point\"\ncalls = \"scripted\"\n[[call]]\nsite = \"cfv\"\nfinding = \"clot\"\n");
         assert!(e.contains("call[0].finding"), "{e}");
+        let e = err("protocol = \"two-point\"\n[[doppler]]\nsite = \"cfv\"\nflow = \"pulsatile\"\naugments = true\n");
+        assert!(
+            e.contains("doppler[0].flow") && e.contains("pulsatile"),
+            "{e}"
+        );
+        let s = TraineeScript::from_toml_str(
+            "protocol = \"two-point\"\n[[doppler]]\nsite = \"fv-mid\"\nflow = \"absent\"\naugments = false\n",
+            "t",
+        )
+        .unwrap();
+        let e = format!(
+            "{:#}",
+            s.check_doppler_sites(&["cfv", "popliteal"]).unwrap_err()
+        );
+        assert!(e.contains("doppler[0].site") && e.contains("fv-mid"), "{e}");
         let e = err("protocol = \"two-point\"\n[press]\npolicy = \"hard\"\n");
         assert!(e.contains("policy") || e.contains("hard"), "{e}");
         let s =

@@ -13,7 +13,7 @@ use echothigh_anatomy::{ProbePose, StructureId};
 use echothigh_cases::Case;
 use echothigh_device::{HapticDevice, SimulatedDevice, SimulatedHand};
 use echothigh_exam::detector::{ARTERY_CUE, COAPTATION, CONTACT_ON};
-use echothigh_exam::{CompressionEvent, Coverage, EventDetector, ExamSample, ProtocolSite};
+use echothigh_exam::{CaseExam, ExamLog, ExamSample, ProtocolSite};
 use echothigh_imaging::ImagingConfig;
 use echothigh_model::{LegSurface, Vec3};
 
@@ -47,15 +47,16 @@ const SEARCH: f64 = 0.0095;
 /// The probe's place on the physics' leg: `s`, θ, tilt.
 type Place = (f64, f64, f64);
 
-/// The walk's state: the run, the hand, the detector and what it found.
+/// The walk's state: the run, the hand, and the case's bookkeeping (the
+/// [`CaseExam`]: detector, coverage, events and calls), whose records go
+/// to `log` as they happen.
 pub(crate) struct Walker<'a> {
     pub run: VirtualRun,
     leg: LegSurface,
     script: &'a TraineeScript,
     imaging: ImagingConfig,
-    pub detector: EventDetector,
-    pub coverage: Coverage,
-    pub events: Vec<CompressionEvent>,
+    pub exam: CaseExam,
+    pub log: &'a mut dyn ExamLog,
     segment: (f64, f64),
     max_depth: f64,
     period: f64,
@@ -83,7 +84,12 @@ struct Now {
 }
 
 impl<'a> Walker<'a> {
-    pub fn new(scenario: &Scenario, script: &'a TraineeScript, case: &Case) -> Result<Self> {
+    pub fn new(
+        scenario: &Scenario,
+        script: &'a TraineeScript,
+        case: &Case,
+        log: &'a mut dyn ExamLog,
+    ) -> Result<Self> {
         let leg = LegSurface::new(&scenario.thigh, "thigh")?
             .context("the exam scenario has a patient's leg")?;
         let start = leg.to_model(&Vec3::new(0.0, 0.2, -scenario.thigh.centre_s));
@@ -98,9 +104,8 @@ impl<'a> Walker<'a> {
             leg,
             script,
             imaging: scenario.live_imaging_config(),
-            detector: EventDetector::new(30.0),
-            coverage: Coverage::new(&case.anatomy),
-            events: Vec::new(),
+            exam: CaseExam::new(case, script.protocol()),
+            log,
             segment: (c - 0.5 * l + END_MARGIN, c + 0.5 * l - END_MARGIN),
             max_depth: 0.9 * scenario.tissue.asymptote(),
             period,
@@ -259,7 +264,7 @@ impl<'a> Walker<'a> {
             h.slew_towards(lift, MOVE_SPEED, w.period);
             Ok((h.setpoint() - lift).norm() < 1e-9
                 && now.depth < -APPROACH_END
-                && !w.detector.pressing())
+                && !w.exam.pressing())
         })
     }
 
@@ -316,10 +321,9 @@ impl<'a> Walker<'a> {
             vein_ratio: look.vein_ratio,
             artery_ratio: look.artery_ratio,
         };
-        if let Some(e) = self.detector.push(&sample)? {
-            self.coverage.apply(&e);
-            self.events.push(e);
-        }
+        self.exam
+            .observe(&sample, &mut *self.log)
+            .context("the exam's bookkeeping")?;
         Ok(Now {
             t,
             force,

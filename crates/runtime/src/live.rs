@@ -412,6 +412,31 @@ pub trait LiveControl: Send + Sync {
     fn driving_device(&self) -> Option<String> {
         None
     }
+    /// Applies a Doppler command (issue 17, [`crate::live_doppler`]); a
+    /// runtime without a flow model refuses.
+    fn doppler(&self, cmd: crate::live_doppler::DopplerCommand) -> Result<(), String> {
+        let _ = cmd;
+        Err("this live runtime has no Doppler".into())
+    }
+    /// The Doppler settings to show (`None`: no flow model).
+    fn doppler_status(&self) -> Option<crate::live_doppler::DopplerStatus> {
+        None
+    }
+    /// As [`Self::image`], and the colour overlay of that same frame into
+    /// `overlay` (one code a pixel, `echothigh_doppler::code_rgb`; left
+    /// empty when the frame has none: B-mode or spectral mode).
+    fn flow_image(&self, pixels: &mut Vec<u8>, overlay: &mut Vec<u8>) -> ImageInfo {
+        overlay.clear();
+        self.image(pixels)
+    }
+    /// Copies the spectral lines numbered `from` on (at most
+    /// [`crate::live_doppler::SPECTRAL_RING`], the newest) into `out`;
+    /// `out.count` is 0 when there are none.
+    fn spectral_lines(&self, from: u64, out: &mut crate::live_doppler::SpectralLines) {
+        let _ = from;
+        out.count = 0;
+        out.data.clear();
+    }
     /// A page started looking at the live state (the image is rendered only
     /// while at least one looks). Each call is paired with [`Self::page_closed`].
     fn page_opened(&self) {}

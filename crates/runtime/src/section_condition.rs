@@ -11,13 +11,37 @@
 //! (8 and 35 mmHg); the wall's echo goes from the healthy to the chronic
 //! state's with the chronic weight.
 
+use echothigh_anatomy::StructureId;
 use echothigh_anatomy::{Layout, LumenState};
-use echothigh_imaging::{AnatomyConfig, CollapseLaw, ContentLayout, VeinCondition};
+use echothigh_imaging::{AnatomyConfig, CollapseLaw, ContentLayout, PostThrombotic, VeinCondition};
+
+/// The seed of a vein's post-thrombotic pattern: its id's name hashed
+/// (FNV-1a), so that one vein keeps one pattern as the probe moves along
+/// it (no flicker between frames) and the pattern is the same every run.
+pub fn pattern_seed(vein: StructureId) -> u64 {
+    vein.as_str()
+        .bytes()
+        .fold(0xcbf2_9ce4_8422_2325u64, |h, b| {
+            (h ^ b as u64).wrapping_mul(0x0100_0000_01b3)
+        })
+}
+
+/// Webs drawn across a chronic vein's lumen (hence three recanalized
+/// channels): "webs or synechiae, partly recanalized channels" (issue 13;
+/// the count is an estimate, none was found measured).
+pub const CHRONIC_WEBS: u8 = 2;
 
 /// The renderer's condition of a vein in `state` (`None` for a healthy
 /// vein, which keeps the renderer's healthy defaults); `base` gives the
-/// thresholds, echoes and attenuation of the imaging states.
-pub fn vein_condition(state: &LumenState, base: &AnatomyConfig) -> Option<VeinCondition> {
+/// thresholds, echoes and attenuation of the imaging states. Where chronic
+/// change outweighs acute thrombus the vein is drawn post-thrombotic
+/// ([`PostThrombotic`]: irregular wall, webs, channels) with the pattern of
+/// `seed` ([`pattern_seed`]).
+pub fn vein_condition(
+    state: &LumenState,
+    base: &AnatomyConfig,
+    seed: u64,
+) -> Option<VeinCondition> {
     if *state == LumenState::HEALTHY {
         return None;
     }
@@ -45,5 +69,10 @@ pub fn vein_condition(state: &LumenState, base: &AnatomyConfig) -> Option<VeinCo
             full: h.collapse_full,
             min_ratio: state.open_min_ratio,
         },
+        sway: state.sway.clamp(0.0, 1.0),
+        post_thrombotic: chronic.then_some(PostThrombotic {
+            webs: CHRONIC_WEBS,
+            seed,
+        }),
     })
 }

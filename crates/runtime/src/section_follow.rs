@@ -319,6 +319,11 @@ impl SectionImager {
         &self.leg
     }
 
+    /// The renderer of the drawn section, read-only.
+    pub fn renderer_ref(&self) -> &Renderer {
+        &self.renderer
+    }
+
     /// The renderer of the current section.
     pub fn renderer(&mut self) -> &mut Renderer {
         &mut self.renderer

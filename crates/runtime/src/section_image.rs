@@ -20,7 +20,7 @@
 //! its own condition: the segments' state at the `s` where the plane cuts
 //! that vein ([`crate::section_condition`]).
 
-use crate::section_condition::vein_condition;
+use crate::section_condition::{pattern_seed, vein_condition};
 use anyhow::{Context, Result};
 use echothigh_anatomy::{Anatomy, Kind, ProbePose, Section, StructureId, Thrombi};
 use echothigh_imaging::{AnatomyConfig, StructureConfig, StructureKind};
@@ -57,7 +57,7 @@ pub fn section_anatomy_with(
     thrombi: Option<&Thrombi>,
 ) -> Result<AnatomyConfig> {
     let section = anatomy.section(pose)?;
-    let vein_id = anatomy.deep_vein_at(pose.s);
+    let vein_id = studied_vein(&section, anatomy.deep_vein_at(pose.s), pose.s);
     let cut = |id: StructureId| -> Result<(f64, f64, f64)> {
         let x = section.get(id).with_context(|| {
             format!(
@@ -74,10 +74,24 @@ pub fn section_anatomy_with(
     // runs with the (superficial) femoral artery: the CFA has ended.
     let artery = match artery_of(vein_id) {
         StructureId::Cfa if section.get(StructureId::Cfa).is_none() => StructureId::Fa,
+        a if section.get(a).is_none() => nearest_cut(
+            &section,
+            &[StructureId::Cfa, StructureId::Fa, StructureId::Pa],
+            pose.s,
+        )
+        .unwrap_or(a),
         a => a,
     };
     let (al, ad, adia) = cut(artery)?;
-    let (fl, fd, fdia) = cut(StructureId::Femur)?;
+    // Below the knee joint the femur has ended: the tibia is the bone
+    // under the popliteal vessels down to the trifurcation.
+    let bone =
+        if section.get(StructureId::Femur).is_none() && section.get(StructureId::Tibia).is_some() {
+            StructureId::Tibia
+        } else {
+            StructureId::Femur
+        };
+    let (fl, fd, fdia) = cut(bone)?;
     let femur_r = 0.5 * fdia;
     let mut c = base.clone();
     c.skin_thickness = section.skin_depth;
@@ -91,11 +105,13 @@ pub fn section_anatomy_with(
     c.femur_lateral = fl;
     c.femur_radius = femur_r;
     c.muscle_thickness = fd - femur_r - section.fascia_depth;
-    c.intermuscular_fascia_depth = intermuscular(&section, c.intermuscular_fascia_depth);
+    c.intermuscular_fascia_depth = intermuscular(&section, c.intermuscular_fascia_depth)
+        .min(c.femur_top() - FASCIA_CLEARANCE)
+        .max(c.skin_thickness + c.fat_thickness + FASCIA_CLEARANCE);
     c.structures = extra_structures(&section, &[vein_id, artery], base, thrombi);
     c.vein_condition = thrombi.and_then(|t| {
         let s = section.get(vein_id).map_or(pose.s, |x| x.s);
-        vein_condition(&t.state(vein_id, s), base)
+        vein_condition(&t.state(vein_id, s), base, pattern_seed(vein_id))
     });
     c.validate("imaging.anatomy").with_context(|| {
         format!(
@@ -105,6 +121,40 @@ pub fn section_anatomy_with(
         )
     })?;
     Ok(c)
+}
+
+/// Least distance (m) of the intermuscular fascia line from the muscle
+/// layer's top and from the femur: 1 mm. Beside the popliteal fossa the
+/// sartorius' deep surface lies deeper than the femur's top under the
+/// probe; the one fascia line the renderer draws then stays just above the
+/// femur (the layered section has one line; the sartorius itself is drawn
+/// as its own outline).
+const FASCIA_CLEARANCE: f64 = 1e-3;
+
+/// The deep vein to draw as the studied one: `level` (the deep vein at the
+/// probe's `s`) when the plane cuts it, else the deep vein the plane cuts
+/// nearest `s` (an oblique plane just past a level's boundary — the
+/// confluence, the adductor hiatus — cuts the previous vein at depth).
+fn studied_vein(section: &Section, level: StructureId, s: f64) -> StructureId {
+    if section.get(level).is_some() {
+        return level;
+    }
+    nearest_cut(
+        section,
+        &[StructureId::Cfv, StructureId::Fv, StructureId::Pv],
+        s,
+    )
+    .unwrap_or(level)
+}
+
+/// Of `ids`, the one the section cuts at the `s` nearest `s`.
+fn nearest_cut(section: &Section, ids: &[StructureId], s: f64) -> Option<StructureId> {
+    section
+        .structures
+        .iter()
+        .filter(|x| ids.contains(&x.id))
+        .min_by(|a, b| (a.s - s).abs().total_cmp(&(b.s - s).abs()))
+        .map(|x| x.id)
 }
 
 /// Depth (m) of the sartorius' deep surface when the section cuts it (the
@@ -150,7 +200,7 @@ fn extra_structures(
                 wall,
                 condition: match (x.kind, thrombi) {
                     (Kind::DeepVein | Kind::SuperficialVein, Some(t)) => {
-                        vein_condition(&t.state(x.id, x.s), base)
+                        vein_condition(&t.state(x.id, x.s), base, pattern_seed(x.id))
                     }
                     _ => None,
                 },

@@ -54,6 +54,16 @@ pub const ASSETS: &[Asset] = &[
         body: include_bytes!("../assets/web/exam.js"),
     },
     Asset {
+        path: "/guide.js",
+        content_type: JS,
+        body: include_bytes!("../assets/web/guide.js"),
+    },
+    Asset {
+        path: "/doppler.js",
+        content_type: JS,
+        body: include_bytes!("../assets/web/doppler.js"),
+    },
+    Asset {
         path: "/vendor/three.module.min.js",
         content_type: JS,
         body: include_bytes!("../assets/web/vendor/three.module.min.js"),

@@ -2,7 +2,7 @@
 //! before the trainee finishes the case.
 
 use echothigh_cases::Vignette;
-use echothigh_exam::{CaseScore, CoverageBin, Finding};
+use echothigh_exam::{CaseScore, CoverageBin, DopplerFinding, Finding};
 use serde::{Deserialize, Serialize};
 
 /// The exam session's state for the page. Sent with a state push only when
@@ -29,6 +29,10 @@ pub struct ExamStatus {
     pub vignette: Option<Vignette>,
     /// The protocol's checklist on the open case's leg.
     pub sites: Vec<SiteStatus>,
+    /// The Doppler sites of the open case (`cfv`, `popliteal`) and the
+    /// trainee's latest Doppler call at each.
+    #[serde(default)]
+    pub doppler: Vec<DopplerSiteStatus>,
     /// The open case's coverage strip (deep veins, 2 cm bins, groin to knee).
     pub coverage: Vec<CoverageBin>,
     /// Compressions detected in the open case.
@@ -60,6 +64,17 @@ pub struct SiteStatus {
     pub done: bool,
     /// The trainee's latest call there.
     pub call: Option<Finding>,
+}
+
+/// One Doppler site of the open case.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DopplerSiteStatus {
+    /// The site's name (`cfv`, `popliteal`).
+    pub name: String,
+    /// The vein there.
+    pub vein: String,
+    /// The trainee's latest Doppler call there.
+    pub call: Option<DopplerFinding>,
 }
 
 /// A finished case, as the feedback shows it.

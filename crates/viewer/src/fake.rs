@@ -49,6 +49,8 @@ pub struct FakeLive {
     /// live system's snapshot never waits for a restart) until released.
     gate: Mutex<Option<mpsc::Receiver<()>>>,
     gate_timed_out: AtomicBool,
+    /// The double's flow (issue 17).
+    pub doppler: crate::fake_doppler::FakeDoppler,
 }
 
 /// How long a held mode change waits for its release before giving up.
@@ -211,6 +213,25 @@ impl LiveControl for FakeLive {
             frame: i.frame,
             time: 0.01 * i.frame as f64,
         }
+    }
+
+    fn doppler(&self, cmd: echothigh_runtime::live_doppler::DopplerCommand) -> Result<(), String> {
+        self.doppler.command(cmd)
+    }
+
+    fn doppler_status(&self) -> Option<echothigh_runtime::live_doppler::DopplerStatus> {
+        Some(self.doppler.status())
+    }
+
+    fn flow_image(&self, pixels: &mut Vec<u8>, overlay: &mut Vec<u8>) -> ImageInfo {
+        let info = self.image(pixels);
+        self.doppler
+            .frame(info.width as usize, info.height as usize, overlay);
+        info
+    }
+
+    fn spectral_lines(&self, from: u64, out: &mut echothigh_runtime::live_doppler::SpectralLines) {
+        self.doppler.lines(from, out);
     }
 
     fn page_opened(&self) {

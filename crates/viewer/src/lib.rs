@@ -12,6 +12,9 @@ mod exam;
 pub mod exam_status;
 #[cfg(test)]
 mod fake;
+#[cfg(test)]
+mod fake_doppler;
+mod flow_frames;
 mod frames;
 mod idle;
 pub mod protocol;

@@ -22,6 +22,7 @@
 use echothigh_exam::Finding;
 use echothigh_runtime::live::{LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, VeinState};
 use echothigh_runtime::live_device::LiveDeviceStatus;
+use echothigh_runtime::live_doppler::{DopplerCommand, DopplerStatus, DOPPLER_COMMAND_TYPES};
 use serde::{Deserialize, Serialize};
 
 /// Version carried by every JSON envelope and binary frame header.
@@ -104,6 +105,10 @@ pub struct ViewState {
     /// the thigh frame, whether it still answers; `None` while the page's
     /// mouse drives.
     pub haptic_device: Option<LiveDeviceStatus>,
+    /// The Doppler mode, scales, gate and manoeuvres (issue 17); absent
+    /// when the live system has no flow model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub doppler: Option<DopplerStatus>,
 }
 
 impl ViewState {
@@ -123,6 +128,7 @@ impl ViewState {
             seq: 0,
             fault: snap.fault.clone(),
             haptic_device: snap.haptic_device.as_ref().map(|d| d.sanitized()),
+            doppler: None,
         }
     }
 }
@@ -144,6 +150,16 @@ pub enum ViewerCommand {
         /// The finding (`normal`, `acute_dvt`, `chronic_post_thrombotic`,
         /// `indeterminate`).
         finding: Finding,
+    },
+    /// Call the spectral Doppler at a Doppler site (`cfv`, `popliteal`):
+    /// the flow pattern and whether a calf squeeze augments it.
+    ExamDoppler {
+        /// The Doppler site's name.
+        site: String,
+        /// `phasic`, `continuous` or `absent`.
+        flow: echothigh_exam::FlowPattern,
+        /// The flow augments on a calf squeeze.
+        augments: bool,
     },
     /// Finish the open case: score it and reveal its truth.
     ExamFinish,
@@ -175,6 +191,8 @@ pub enum ClientMessage {
     Live(LiveCommand),
     /// Handled by the viewer server.
     Viewer(ViewerCommand),
+    /// Forwarded to the runtime's flow model (issue 17).
+    Doppler(DopplerCommand),
 }
 
 /// Why a page message was refused.
@@ -222,7 +240,11 @@ pub fn decode_client(text: &str, limits: &CommandLimits) -> Result<ClientMessage
         kind: kind.clone(),
         reason: e.to_string(),
     };
-    let (msg, known) = if kind.starts_with("exam_")
+    let (msg, known) = if DOPPLER_COMMAND_TYPES.contains(&kind.as_str()) {
+        let cmd: DopplerCommand = serde_json::from_value(value.clone()).map_err(invalid)?;
+        let known = serde_json::to_value(&cmd);
+        (ClientMessage::Doppler(cmd), known)
+    } else if kind.starts_with("exam_")
         || ["ack", "image_ack", "take_control"].contains(&kind.as_str())
     {
         let cmd: ViewerCommand = serde_json::from_value(value.clone()).map_err(invalid)?;
@@ -245,8 +267,10 @@ pub fn decode_client(text: &str, limits: &CommandLimits) -> Result<ClientMessage
             });
         }
     }
-    if let ClientMessage::Live(cmd) = &msg {
-        cmd.validate(limits)?;
+    match &msg {
+        ClientMessage::Live(cmd) => cmd.validate(limits)?,
+        ClientMessage::Doppler(cmd) => cmd.validate()?,
+        ClientMessage::Viewer(_) => {}
     }
     Ok(msg)
 }
@@ -269,6 +293,19 @@ pub enum FrameKind {
     /// The surface nodes that moved: `a` = their count, `b` = all nodes,
     /// then `a` u32 indices, `3a` f32 positions (m), `a` f32 compressions.
     SurfaceDelta = 5,
+    /// [`FrameKind::ImagePng`] with the colour overlay of the same frame
+    /// (issue 17): `a` = width, `b` = height, the f64 time (s), a u32 byte
+    /// length `L`, the image's PNG (`L` bytes), then an 8-bit gray PNG of
+    /// the overlay codes (0 none, else `echothigh_doppler::code_rgb`).
+    ImagePngFlow = 6,
+    /// [`FrameKind::ImageDelta`] with the colour overlay, laid out as
+    /// [`FrameKind::ImagePngFlow`] (the overlay whole, not a delta).
+    ImageDeltaFlow = 7,
+    /// PW spectral lines (issue 17): `a` = lines, `b` = rows a line, then
+    /// the u64 number of the first line, its f64 time (s), the f64 time
+    /// between lines (s), then `a·b` 8-bit magnitudes, line after line,
+    /// each from the top of the display span (the highest frequency) down.
+    Spectral = 8,
 }
 
 /// Magic bytes opening every binary frame.
@@ -313,6 +350,9 @@ impl FrameHeader {
             3 => FrameKind::ImagePng,
             4 => FrameKind::ImageDelta,
             5 => FrameKind::SurfaceDelta,
+            6 => FrameKind::ImagePngFlow,
+            7 => FrameKind::ImageDeltaFlow,
+            8 => FrameKind::Spectral,
             _ => return None,
         };
         let a = u32::from_le_bytes(head[8..12].try_into().ok()?);
@@ -323,6 +363,8 @@ impl FrameHeader {
             FrameKind::Surface => payload.len() == a as usize * 16,
             FrameKind::ImagePng | FrameKind::ImageDelta => payload.len() > 8,
             FrameKind::SurfaceDelta => payload.len() == a as usize * 20 && a <= b,
+            FrameKind::ImagePngFlow | FrameKind::ImageDeltaFlow => payload.len() > 12,
+            FrameKind::Spectral => payload.len() == 24 + a as usize * b as usize,
         };
         fits.then_some((FrameHeader { kind, a, b }, payload))
     }

@@ -146,7 +146,9 @@ pub fn trainee(t: &TraineeHistory, db: &str) -> String {
             num(pct(s.specificity), s.specificity)
         );
     }
-    h.push_str("</tbody></table><h2>Sessions</h2>");
+    h.push_str("</tbody></table>");
+    breakdown(&mut h, t);
+    h.push_str("<h2>Sessions</h2>");
     for s in t.sessions.iter().rev() {
         let _ = write!(
             h,
@@ -173,6 +175,54 @@ pub fn trainee(t: &TraineeHistory, db: &str) -> String {
     }
     h.push_str("</body></html>");
     h
+}
+
+/// The per-site breakdown beyond the acute-DVT counts: the Doppler
+/// calls' accuracy per site and the segments the finished cases missed.
+fn breakdown(h: &mut String, t: &TraineeHistory) {
+    h.push_str(
+        "<h2>Doppler calls by site</h2><table id=doppler><thead><tr><th>site</th><th>right</th>\
+         <th>sites</th><th>called</th><th>pattern right</th><th>augmentation right</th>\
+         <th>accuracy</th></tr></thead><tbody>",
+    );
+    for d in &t.doppler {
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td><td class=n>{}</td>\
+             <td class=n>{}</td>{}</tr>",
+            escape(&d.site),
+            d.correct,
+            d.total,
+            d.called,
+            d.flow_correct,
+            d.augments_correct,
+            num(pct(d.accuracy()), d.accuracy())
+        );
+    }
+    h.push_str("</tbody></table><h2>Missed segments</h2>");
+    if t.missed.is_empty() {
+        h.push_str(
+            "<p id=missed class=dim>None: every diseased segment was examined or called.</p>",
+        );
+        return;
+    }
+    h.push_str(
+        "<table id=missed><thead><tr><th>case</th><th>vein</th><th>from (mm)</th><th>to (mm)</th>\
+         <th>truth</th></tr></thead><tbody>",
+    );
+    for m in &t.missed {
+        let s = &m.segment;
+        let _ = write!(
+            h,
+            "<tr><td>{}</td><td>{}</td><td class=n>{:.0}</td><td class=n>{:.0}</td><td>{}</td></tr>",
+            escape(&m.case),
+            escape(&s.vein),
+            s.s_start * 1e3,
+            s.s_end * 1e3,
+            s.truth.name()
+        );
+    }
+    h.push_str("</tbody></table>");
 }
 
 /// `name` percent-encoded for a URL path segment (RFC 3986 unreserved
@@ -205,5 +255,106 @@ mod tests {
             "&lt;b&gt;&quot;Ada&quot; &amp; &#39;Bo&#39;&lt;/b&gt;"
         );
         assert_eq!(percent_encode("Ada Lovelace/é"), "Ada%20Lovelace%2F%C3%A9");
+    }
+
+    /// The trainee page shows the per-site counts, sensitivity and
+    /// specificity, the Doppler accuracy and the missed segments it is
+    /// given (the numbers of `crates/records/tests/breakdown.rs`: cfv 1 of
+    /// 3 Doppler calls right = 33 %, popliteal 2 of 3 = 67 %; per-site
+    /// TP 1 FN 1 TN 0 FP 1 → sensitivity 50 %, specificity 0 %).
+    #[test]
+    fn trainee_page_renders_the_breakdown() {
+        use echothigh_exam::{Finding, MissedSegment};
+        use echothigh_records::breakdown::{DopplerAccuracy, MissedInCase};
+        use echothigh_records::stats::Confusion;
+        use echothigh_records::SiteStats;
+        let confusion = Confusion {
+            true_positive: 1,
+            false_negative: 1,
+            true_negative: 0,
+            false_positive: 1,
+            unresolved_negative: 1,
+        };
+        let h = TraineeHistory {
+            name: "Ines".into(),
+            sessions: Vec::new(),
+            rates: Rates::default(),
+            sites: vec![SiteStats {
+                site: "cfv".into(),
+                sensitivity: confusion.sensitivity(),
+                specificity: confusion.specificity(),
+                confusion,
+            }],
+            missed: vec![MissedInCase {
+                case_id: 2,
+                case: "B".into(),
+                segment: MissedSegment {
+                    vein: "fv".into(),
+                    s_start: 0.17,
+                    s_end: 0.23,
+                    truth: Finding::AcuteDvt,
+                },
+            }],
+            doppler: vec![
+                DopplerAccuracy {
+                    site: "cfv".into(),
+                    total: 3,
+                    called: 2,
+                    correct: 1,
+                    flow_correct: 1,
+                    augments_correct: 2,
+                },
+                DopplerAccuracy {
+                    site: "popliteal".into(),
+                    total: 3,
+                    called: 3,
+                    correct: 2,
+                    flow_correct: 3,
+                    augments_correct: 2,
+                },
+            ],
+        };
+        let page = trainee(&h, "test.sqlite3");
+        let n = |v: &str| format!("<td class=n>{v}</td>");
+        let sites = &page[page.find("id=sites").unwrap()..page.find("id=doppler").unwrap()];
+        assert!(
+            sites.contains(&format!(
+                "<td>cfv</td>{}{}{}{}",
+                n("1"),
+                n("1"),
+                n("0"),
+                n("1")
+            )),
+            "{sites}"
+        );
+        assert!(
+            sites.contains(">50 %<") && sites.contains(">0 %<"),
+            "{sites}"
+        );
+        let doppler = &page[page.find("id=doppler").unwrap()..page.find("id=missed").unwrap()];
+        assert!(
+            doppler.contains(&format!(
+                "<td>cfv</td>{}{}{}{}{}",
+                n("1"),
+                n("3"),
+                n("2"),
+                n("1"),
+                n("2")
+            )),
+            "{doppler}"
+        );
+        assert!(
+            doppler.contains(">33 %<") && doppler.contains(">67 %<"),
+            "{doppler}"
+        );
+        let missed = &page[page.find("id=missed").unwrap()..];
+        assert!(
+            missed.contains(&format!(
+                "<td>B</td><td>fv</td>{}{}<td>acute_dvt</td>",
+                n("170"),
+                n("230")
+            )),
+            "{missed}"
+        );
     }
 }

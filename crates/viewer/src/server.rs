@@ -145,6 +145,7 @@ impl AppState {
                 Ok(())
             }
             ClientMessage::Live(cmd) => self.control.command(cmd),
+            ClientMessage::Doppler(cmd) => self.control.doppler(cmd),
             ClientMessage::Viewer(ViewerCommand::ExamStart) => {
                 // The exam lock is not held across the case's loading (a
                 // rebuild of the physics): the other connections' pushes
@@ -164,6 +165,14 @@ impl AppState {
             ClientMessage::Viewer(ViewerCommand::ExamCall { site, finding }) => {
                 self.exam().call(&site, finding).map_err(|e| e.to_string())
             }
+            ClientMessage::Viewer(ViewerCommand::ExamDoppler {
+                site,
+                flow,
+                augments,
+            }) => self
+                .exam()
+                .call_doppler(&site, echothigh_exam::DopplerFinding { flow, augments })
+                .map_err(|e| e.to_string()),
             ClientMessage::Viewer(ViewerCommand::ExamFinish) => {
                 self.exam().finish().map_err(|e| e.to_string())
             }
@@ -433,6 +442,11 @@ struct Conn {
     epoch: tokio::time::Instant,
     snap: LiveSnapshot,
     pixels: Vec<u8>,
+    /// The colour overlay of the last image read (issue 17).
+    overlay: Vec<u8>,
+    /// The number of the next spectral line to send, and the lines read.
+    next_line: u64,
+    lines: echothigh_runtime::live_doppler::SpectralLines,
     /// The exam status's revision last sent on this connection.
     exam_rev: Option<u64>,
     /// [`AppState::mesh_epoch`] of the mesh this connection sent.
@@ -451,6 +465,9 @@ impl Conn {
             epoch: tokio::time::Instant::now(),
             snap: LiveSnapshot::default(),
             pixels: Vec::new(),
+            overlay: Vec::new(),
+            next_line: 0,
+            lines: Default::default(),
             exam_rev: None,
             mesh_epoch: 0,
         }
@@ -574,6 +591,10 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
     let mut state = app.view_state(&conn.snap, &mut conn.exam_rev);
     state.seq = conn.sent;
     state.observer = !app.drives(conn.id, false);
+    state.doppler = app.control.doppler_status();
+    let spectral = state
+        .doppler
+        .is_some_and(|d| d.mode == echothigh_runtime::live_doppler::DopplerMode::Spectral);
     let state = json(ServerMessage::State(state));
     conn.budget.spend(state.to_text().map_or(0, str::len));
     out.push(state);
@@ -584,11 +605,26 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
         }
     }
     if conn.budget.allows() && !conn.image_pending {
-        let info = app.control.image(&mut conn.pixels);
+        let info = app.control.flow_image(&mut conn.pixels, &mut conn.overlay);
         if let Some(image) = conn.wire.image(info, &conn.pixels) {
+            let image = if conn.overlay.is_empty() {
+                image
+            } else {
+                super::flow_frames::with_overlay(&image, &conn.overlay).unwrap_or(image)
+            };
             conn.budget.spend(image.len());
             conn.image_pending = true;
             out.push(Message::Binary(image.into()));
+        }
+    }
+    // The spectral lines since the last sent (a page behind by more than
+    // the runtime's ring misses the oldest: latest wins here too).
+    if spectral && conn.budget.allows() {
+        app.control.spectral_lines(conn.next_line, &mut conn.lines);
+        if let Some(frame) = super::flow_frames::spectral_frame(&conn.lines) {
+            conn.next_line = conn.lines.first + conn.lines.count as u64;
+            conn.budget.spend(frame.len());
+            out.push(Message::Binary(frame.into()));
         }
     }
     out

@@ -145,6 +145,10 @@ impl ExamLog for Tee<'_> {
         self.1.call(c)?;
         self.0.call(c)
     }
+    fn doppler(&mut self, c: &echothigh_exam::DopplerCall) -> Result<(), echothigh_exam::LogError> {
+        self.1.doppler(c)?;
+        self.0.doppler(c)
+    }
     fn finish(
         &mut self,
         coverage: &[echothigh_exam::CoverageBin],

@@ -173,4 +173,26 @@ impl Source {
             }
         }
     }
+
+    /// On the leg, the drawn section's renderer and what its flow needs
+    /// (issue 17): the leg's anatomy, the case's segments (`empty` for a
+    /// healthy leg), the section's pose and a key that changes with each
+    /// rebuild. `None` on the elliptic cylinder (no flow model).
+    pub fn flow_parts<'a>(
+        &'a self,
+        empty: &'a Thrombi,
+    ) -> Option<(&'a Renderer, super::doppler::FlowContext<'a>)> {
+        match self {
+            Source::Fixed(_) => None,
+            Source::Leg(f, _) => Some((
+                f.renderer_ref(),
+                super::doppler::FlowContext {
+                    anatomy: f.leg().anatomy(),
+                    thrombi: f.thrombi().unwrap_or(empty),
+                    pose: f.built_pose(),
+                    key: f.rebuilds(),
+                },
+            )),
+        }
+    }
 }

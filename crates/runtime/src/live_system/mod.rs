@@ -19,6 +19,10 @@
 
 mod device_status;
 mod hardware_loop;
+mod doppler;
+mod doppler_control;
+#[cfg(test)]
+mod doppler_tests;
 mod imaging_source;
 mod publish;
 mod session;
@@ -114,6 +118,8 @@ pub struct LiveSystem {
     imaging: Mutex<Option<ImagingThread>>,
     /// The real device driving the probe, when one is attached (issue 15).
     device_info: Option<LiveDeviceInfo>,
+    /// The live flow's controls, lines and status (issue 17).
+    doppler: Arc<doppler::DopplerShared>,
 }
 
 /// The hand target for a probe placed at `theta` (rad, 0 = top, positive
@@ -228,6 +234,7 @@ impl LiveSystem {
             }),
             image: Mutex::new(ImageSlot {
                 pixels: vec![0; img.columns * img.rows],
+                overlay: Vec::new(),
                 width: img.columns as u32,
                 height: img.rows as u32,
                 frame: 0,
@@ -243,11 +250,14 @@ impl LiveSystem {
         let leg = physics.model().mesh().leg().cloned();
         let target = target_on_surface(&scenario, leg.as_ref(), 0.0, 0.0, LIFTED_DEPTH, 0.0)
             .map_err(anyhow::Error::msg)?;
+        let doppler = Arc::new(doppler::DopplerShared::default());
+        doppler.set_case(case);
         let case = case.map(|c| (c.file.name.clone(), Arc::new(c.thrombi.clone())));
         let imaging = ImagingThread::spawn(
             shared.clone(),
             &scenario,
             case.as_ref().map(|c| c.1.clone()),
+            doppler.clone(),
         )?;
         let inner = Inner {
             scenario,
@@ -265,6 +275,7 @@ impl LiveSystem {
             inner: Mutex::new(inner),
             imaging: Mutex::new(Some(imaging)),
             device_info,
+            doppler,
         });
         {
             let mut inner = system
@@ -415,10 +426,12 @@ impl LiveSystem {
             hardware,
         };
         self.start_from(&mut inner, carried, true)?;
+        self.doppler.set_case(case);
         let imaging = ImagingThread::spawn(
             self.shared.clone(),
             &inner.scenario,
             inner.case.as_ref().map(|c| c.1.clone()),
+            self.doppler.clone(),
         )?;
         if let Ok(mut slot) = self.imaging.lock() {
             imaging.wake();
@@ -527,6 +540,47 @@ impl LiveControl for LiveSystem {
 
     fn vein(&self) -> VeinState {
         vein_of(self.shared.vein.load(Ordering::Relaxed))
+    }
+
+    fn doppler(&self, cmd: crate::live_doppler::DopplerCommand) -> Result<(), String> {
+        cmd.validate().map_err(|e| e.to_string())?;
+        let now = self
+            .shared
+            .image_input
+            .lock()
+            .map(|i| i.time)
+            .map_err(|_| "the physics' image input is poisoned".to_string())?;
+        self.doppler.command(cmd, now)
+    }
+
+    fn doppler_status(&self) -> Option<crate::live_doppler::DopplerStatus> {
+        Some(self.doppler.status())
+    }
+
+    fn flow_image(&self, pixels: &mut Vec<u8>, overlay: &mut Vec<u8>) -> ImageInfo {
+        match self.shared.image.lock() {
+            Ok(s) => {
+                pixels.clone_from(&s.pixels);
+                overlay.clone_from(&s.overlay);
+                ImageInfo {
+                    width: s.width,
+                    height: s.height,
+                    frame: s.frame,
+                    time: s.time,
+                }
+            }
+            Err(_) => ImageInfo::default(),
+        }
+    }
+
+    fn spectral_lines(&self, from: u64, out: &mut crate::live_doppler::SpectralLines) {
+        match self.doppler.lines.lock() {
+            Ok(l) => l.copy(from, out),
+            Err(_) => {
+                out.count = 0;
+                out.data.clear();
+            }
+        }
     }
 
     fn limits(&self) -> CommandLimits {

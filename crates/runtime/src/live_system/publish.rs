@@ -1,6 +1,7 @@
 //! What the physics publishes for the front end (mesh, forces, the section
 //! under the probe) and the imaging thread that renders it.
 
+use super::doppler::{DopplerShared, FlowImaging};
 use super::imaging_source::{Probe, Source};
 use super::shared::{vein_of, Shared};
 use crate::live::{SectionReading, COAPTED_RATIO};
@@ -142,6 +143,7 @@ impl ImagingThread {
         shared: Arc<Shared>,
         scenario: &Scenario,
         thrombi: Option<Arc<Thrombi>>,
+        doppler: Arc<DopplerShared>,
     ) -> Result<Self> {
         let cfg = scenario.live_imaging_config();
         let leg = LegSurface::new(&scenario.thigh, "thigh").context("the scenario's leg")?;
@@ -155,7 +157,7 @@ impl ImagingThread {
         let handle = std::thread::Builder::new()
             .name("imaging".into())
             .spawn(move || {
-                let r = imaging_loop(&shared, &cfg, leg, thrombi, reading, &st);
+                let r = imaging_loop(&shared, &doppler, &cfg, leg, thrombi, reading, &st);
                 if let Err(e) = &r {
                     shared.report_fault("imaging", e);
                 }
@@ -190,6 +192,7 @@ const IDLE_NAP: Duration = Duration::from_millis(200);
 /// reading of the section under the probe into `reading`.
 fn imaging_loop(
     shared: &Shared,
+    doppler: &DopplerShared,
     cfg: &ImagingConfig,
     leg: Option<LegSurface>,
     thrombi: Option<Arc<Thrombi>>,
@@ -200,6 +203,10 @@ fn imaging_loop(
     let mut source = Source::new(shared, cfg, leg, vein_of(vein), thrombi)?;
     let mut local = SectionDeformation::rest(0.04);
     let mut pixels = vec![0u8; cfg.columns * cfg.rows];
+    // The colour overlay of the frame (issue 17), and its processor.
+    let mut overlay = Vec::with_capacity(cfg.columns * cfg.rows);
+    let mut flow = FlowImaging::default();
+    let no_thrombi = Thrombi::default();
     // A fixed-rate schedule: the render's own time does not lengthen the
     // period (a late frame starts the next period now).
     let period = Duration::from_millis(50);
@@ -246,18 +253,33 @@ fn imaging_loop(
             time: input.time,
             lateral_offset,
         };
+        // The studied vein drawn distended by a Valsalva strain (issue 17).
+        renderer.set_vein_distension(flow.vein_distension());
         renderer
             .render_into(&frame, &mut pixels)
             .map_err(|e| anyhow::anyhow!("imaging: rendering a frame: {e}"))?;
         let lumens = renderer
             .lumens(&frame)
             .map_err(|e| anyhow::anyhow!("imaging: the frame's lumens: {e}"))?;
+        match source.flow_parts(&no_thrombi) {
+            Some((renderer, ctx)) => flow.frame(
+                doppler,
+                &ctx,
+                renderer,
+                &frame,
+                &pixels,
+                lumens.as_ref().map(|l| l.vein.area / l.vein.rest_area),
+                &mut overlay,
+            )?,
+            None => overlay.clear(),
+        }
         let frame_no = {
             let mut slot = shared
                 .image
                 .lock()
                 .map_err(|_| anyhow::anyhow!("imaging: the image slot is poisoned"))?;
             slot.pixels.copy_from_slice(&pixels);
+            slot.overlay.clone_from(&overlay);
             slot.frame += 1;
             slot.time = input.time;
             slot.frame
@@ -315,6 +337,7 @@ mod tests {
             }),
             image: Mutex::new(ImageSlot {
                 pixels: Vec::new(),
+                overlay: Vec::new(),
                 width: 0,
                 height: 0,
                 frame: 0,
@@ -331,7 +354,8 @@ mod tests {
         // here behind the loader's back to make the renderer fail.
         let mut scenario = Scenario::default();
         scenario.imaging.live_rows = 0;
-        let thread = ImagingThread::spawn(shared.clone(), &scenario, None).unwrap();
+        let thread =
+            ImagingThread::spawn(shared.clone(), &scenario, None, Default::default()).unwrap();
         let err = thread.stop().unwrap_err();
         assert!(format!("{err:#}").contains("imaging"), "{err:#}");
         let fault = shared.fault.lock().unwrap().clone();

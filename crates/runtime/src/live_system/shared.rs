@@ -56,6 +56,9 @@ pub(super) struct ImageInput {
 pub(super) struct ImageSlot {
     /// 8-bit gray, row-major.
     pub pixels: Vec<u8>,
+    /// The colour overlay of the same frame, one code a pixel
+    /// (`echothigh_doppler::code_rgb`), empty when none (issue 17).
+    pub overlay: Vec<u8>,
     /// Columns.
     pub width: u32,
     /// Rows.

@@ -6,6 +6,8 @@ import { ThighScene } from './scene.js';
 import { EchoView, ForcePlot, Gauge, norm, showStatus } from './panels.js';
 import { showExam } from './exam.js';
 import { deviceDrives, showDevice } from './device.js';
+import { Guide } from './guide.js';
+import { setupDoppler } from './doppler.js';
 
 const PROTOCOL_VERSION = 1;
 const FRAME_IMAGE = 1;
@@ -13,6 +15,9 @@ const FRAME_SURFACE = 2;
 const FRAME_IMAGE_PNG = 3; // f64 time, then a gray PNG
 const FRAME_IMAGE_DELTA = 4; // f64 time, then a PNG of (new − old) mod 256
 const FRAME_SURFACE_DELTA = 5; // a changed of b nodes: u32 indices, 3a f32 positions, a f32 compressions
+const FRAME_IMAGE_PNG_FLOW = 6; // as 3, with u32 length L before the PNG, then the colour overlay's PNG
+const FRAME_IMAGE_DELTA_FLOW = 7; // as 4, likewise
+const FRAME_SPECTRAL = 8; // a lines of b rows: u64 first, f64 time, f64 interval, then a·b bytes
 const DEPTH_STEP = 0.0005; // m per wheel notch or key press
 const MAX_DEPTH = 0.035; // m, below the server's limit
 const TILT_STEP = 0.05; // rad
@@ -47,6 +52,17 @@ live.scene = scene; // for the browser test and the console
 const echo = new EchoView($('echo'));
 const plot = new ForcePlot($('plot'), 5);
 const gauge = new Gauge($('gauge-fill'), $('gauge-limit'), $('gauge-value'));
+// The technical status and settings, hidden until asked for (remembered).
+function showTech(on) {
+  document.body.classList.toggle('tech-on', on);
+  $('tech-open').setAttribute('aria-pressed', String(on));
+  try { localStorage.setItem('echothigh.tech', on ? '1' : '0'); } catch { /* not remembered */ }
+}
+$('tech-open').addEventListener('click', () => showTech(!document.body.classList.contains('tech-on')));
+showTech((() => { try { return localStorage.getItem('echothigh.tech') === '1'; } catch { return false; } })());
+const guide = new Guide($('guide'), document.querySelector('#view3d .help'), $('guide-open'));
+const doppler = setupDoppler($, (msg) => send(msg));
+live.doppler = doppler; // for the browser test and the console
 
 // ---- connection -----------------------------------------------------------
 let ws = null;
@@ -112,15 +128,24 @@ function onFrame(buf) {
       surface.comp[i] = comp[j];
     }
     showSurface();
-  } else if ((kind === FRAME_IMAGE_PNG || kind === FRAME_IMAGE_DELTA) && buf.byteLength > 24) {
+  } else if (kind === FRAME_SPECTRAL && buf.byteLength === 40 + a * b && b === 64) {
+    const interval = new DataView(buf, 32, 8).getFloat64(0, true);
+    doppler.lines(new Uint8Array(buf, 40), a, interval);
+  } else if ((kind === FRAME_IMAGE_PNG || kind === FRAME_IMAGE_DELTA) && buf.byteLength > 24
+    || (kind === FRAME_IMAGE_PNG_FLOW || kind === FRAME_IMAGE_DELTA_FLOW) && buf.byteLength > 28) {
     const time = new DataView(buf, 16, 8).getFloat64(0, true);
-    const png = new Blob([new Uint8Array(buf, 24)], { type: 'image/png' });
+    const flow = kind === FRAME_IMAGE_PNG_FLOW || kind === FRAME_IMAGE_DELTA_FLOW;
+    const len = flow ? new DataView(buf, 24, 4).getUint32(0, true) : buf.byteLength - 24;
+    const at = flow ? 28 : 24;
+    const png = new Blob([new Uint8Array(buf, at, len)], { type: 'image/png' });
+    const codes = flow ? new Blob([new Uint8Array(buf, at + len)], { type: 'image/png' }) : null;
+    const key = kind === FRAME_IMAGE_PNG || kind === FRAME_IMAGE_PNG_FLOW;
     // Decoded in arrival order: a delta applies to the image before it.
-    imageChain = imageChain.then(() => decodeGray(png, a, b)).then((px) => {
-      if (kind === FRAME_IMAGE_PNG) gray = px;
+    imageChain = imageChain.then(() => Promise.all([decodeGray(png, a, b), codes && decodeGray(codes, a, b)])).then(([px, overlay]) => {
+      if (key) gray = px;
       else if (gray && gray.length === px.length) for (let i = 0; i < px.length; i++) gray[i] = (gray[i] + px[i]) & 255;
       else return; // a delta without its key frame (cannot happen on one connection)
-      showImage(a, b, gray, time);
+      showImage(a, b, gray, time, overlay);
     }).catch((e) => toast(`image: ${e.message}`))
       // Flow control: the server sends the next image once this one is shown.
       .finally(() => send({ type: 'image_ack' }));
@@ -135,8 +160,8 @@ function showSurface() {
   if (scene) scene.updateSurface(surface.pos, surface.comp);
   live.surfaceFrames += 1;
 }
-function showImage(w, h, px, time) {
-  echo.draw(w, h, px);
+function showImage(w, h, px, time, overlay = null) {
+  echo.draw(w, h, px, overlay, doppler.palette(), doppler.decorate);
   live.imageFrames += 1;
   live.imageTime = time;
   stamp(live.arrivals.image);
@@ -175,6 +200,8 @@ function onState(s) {
   syncControls(s);
   showExam(s.exam, s.level_s, send);
   showDevice(s, scene);
+  guide.update(s, live.probe, deviceDrives(s));
+  doppler.update(s.doppler);
   $('observer').hidden = !s.observer;
   showBehind(s);
 }

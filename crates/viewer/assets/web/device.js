@@ -1,6 +1,6 @@
-// A real haptic device driving the probe (issue 15): its panel (name,
-// clutch, the force it renders next to the tissue force, whether it still
-// answers) and its workspace, the device's reach mapped on the leg by the
+// A real haptic device driving the probe (issue 15): its strip over the top
+// of the 3D view (name, clutch, the force it renders next to the tissue
+// force, whether it still answers) and its workspace, the device's reach mapped on the leg by the
 // calibration, drawn as a box in the 3D view. The state's `haptic_device`
 // is null while the mouse drives; then all of this stays hidden.
 import * as THREE from 'three';
@@ -44,7 +44,9 @@ export function showDevice(s, scene) {
   const panel = document.getElementById('device-box');
   panel.hidden = !d;
   for (const id of ['lift', 'play']) document.getElementById(id).disabled = !!d;
-  document.getElementById('probe-help').hidden = !!d;
+  // The mouse's help line gives way to the device's strip (a class, not the
+  // line's `hidden`, which the guided start owns).
+  document.body.classList.toggle('device-drives', !!d);
   drawWorkspace(scene, d ? d.workspace : null);
   if (!d) return;
   const set = (id, text) => { document.getElementById(id).textContent = text; };

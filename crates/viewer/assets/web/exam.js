@@ -12,6 +12,11 @@ export const FINDINGS = [
   ['chronic_post_thrombotic', 'chronic post-thrombotic'],
   ['indeterminate', 'indeterminate (inadequate study)'],
 ];
+// Doppler readings (crates/exam doppler: flow pattern, augmentation on a calf
+// squeeze) as one select value `flow:0|1`.
+export const DOPPLER = ['phasic', 'continuous', 'absent'].flatMap((flow) => [true, false].map((aug) =>
+  [`${flow}:${aug ? 1 : 0}`, `${flow}, ${aug ? 'augments' : 'no augmentation'}`]));
+const dopplerValue = (f) => (f ? `${f.flow}:${f.augments ? 1 : 0}` : '');
 // Coverage bin colours (BinState) and truth colours (ground-truth kinds).
 const BIN_COLOUR = {
   not_examined: '#39414f', inadequate_pressure: '#d9a400', not_closed: '#ff5a4f', closed: '#3fd07a',
@@ -47,6 +52,7 @@ export function showExam(e, levelS, send) {
 /** The checklist: one row per site, its pressed mark and its call. */
 function showSites(e, send) {
   const table = $('exam-sites');
+  const doppler = e.open ? (e.doppler || []) : [];
   const key = e.open ? `${e.case_number}:${e.sites.map((x) => x.name).join(',')}` : '';
   if (table.dataset.key !== key) {
     table.dataset.key = key;
@@ -68,8 +74,35 @@ function showSites(e, send) {
       td.append(sel);
       tr.append(name, done, td);
       return tr;
+    }), ...doppler.map((x) => {
+      // One select per Doppler site (spectral Doppler of the CFV and the
+      // popliteal vein, SRU 2018).
+      const tr = document.createElement('tr');
+      const name = document.createElement('th');
+      name.textContent = `${x.name} Doppler`;
+      name.title = `spectral Doppler of the ${x.vein}: flow pattern and calf-squeeze augmentation`;
+      const td = document.createElement('td');
+      td.colSpan = 2;
+      const sel = document.createElement('select');
+      sel.dataset.doppler = x.name;
+      sel.setAttribute('aria-label', `Doppler at ${x.name}`);
+      const none = new Option('— Doppler —', '');
+      none.disabled = true;
+      sel.append(none, ...DOPPLER.map(([v, label]) => new Option(label, v)));
+      sel.addEventListener('change', () => {
+        const [flow, aug] = sel.value.split(':');
+        send({ type: 'exam_doppler', site: x.name, flow, augments: aug === '1' });
+      });
+      td.append(sel);
+      tr.append(name, td);
+      return tr;
     }));
   }
+  doppler.forEach((x, j) => {
+    const tr = table.rows[e.sites.length + j];
+    const sel = tr && tr.cells[1].firstChild;
+    if (sel && document.activeElement !== sel) sel.value = dopplerValue(x.call);
+  });
   e.sites.forEach((x, i) => {
     const tr = table.rows[i];
     if (!tr) return;
@@ -91,10 +124,15 @@ function showResult(e) {
       (x.called_without_adequate_pressure ? ' (without adequate pressure)' : ''));
   const missed = (sc.missed || []).map((m) => `${m.truth} in ${m.vein} ${(m.s_start * 1000).toFixed(0)}–` +
     `${(m.s_end * 1000).toFixed(0)} mm never examined`);
+  const dp = sc.doppler && sc.doppler.total ? sc.doppler : null;
+  const dwrong = dp ? dp.sites.filter((x) => dopplerValue(x.call) !== dopplerValue(x.truth))
+    .map((x) => `${x.site} Doppler: called ${x.call ? x.call.flow : 'nothing'}, truth ${x.truth.flow}` +
+      `${x.truth.augments ? ' augmenting' : ' not augmenting'}`) : [];
   el.textContent = `${r.title}: ${r.diagnosis.replaceAll('_', ' ')}. Calls ${sc.calls_correct} / ${sc.calls_total}, ` +
+    (dp ? `Doppler ${dp.correct} / ${dp.total}, ` : '') +
     `coverage ${(sc.coverage * 100).toFixed(0)} %, adequate pressure ${(sc.pressure_adequate * 100).toFixed(0)} % of presses, ` +
     `peak ${sc.peak_force.toFixed(1)} N` + (sc.excessive_force_on_tail ? `, ${sc.excessive_force_on_tail} hard presses on a free-floating thrombus` : '') +
-    (wrong.length ? `. ${wrong.join('; ')}` : '') + (missed.length ? `. Missed: ${missed.join('; ')}` : '') +
+    (wrong.length ? `. ${wrong.join('; ')}` : '') + (dwrong.length ? `. ${dwrong.join('; ')}` : '') + (missed.length ? `. Missed: ${missed.join('; ')}` : '') +
     (r.teaching ? `. ${r.teaching}` : '');
   el.className = sc.calls_correct === sc.calls_total && !missed.length ? 'right' : 'wrong';
 }

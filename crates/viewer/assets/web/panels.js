@@ -15,8 +15,12 @@ export class EchoView {
     this.frames = 0;
   }
 
-  /** `pixels`: Uint8Array of width × height. */
-  draw(width, height, pixels) {
+  /**
+   * `pixels`: Uint8Array of width × height; `overlay` (optional, same
+   * size): colour codes drawn with `palette` (256 RGB triples) where not 0
+   * (issue 17); `decorate(ctx, w, h)` draws over the image (the PW gate).
+   */
+  draw(width, height, pixels, overlay = null, palette = null, decorate = null) {
     if (width === 0 || height === 0) return;
     if (!this.image || this.image.width !== width || this.image.height !== height) {
       this.canvas.width = width;
@@ -28,7 +32,16 @@ export class EchoView {
       const g = pixels[i];
       rgba[j] = g; rgba[j + 1] = g; rgba[j + 2] = g; rgba[j + 3] = 255;
     }
+    if (overlay && palette && overlay.length === pixels.length) {
+      let coloured = 0;
+      for (let i = 0, j = 0; i < overlay.length; i++, j += 4) {
+        const c = overlay[i];
+        if (c) { rgba[j] = palette[3 * c]; rgba[j + 1] = palette[3 * c + 1]; rgba[j + 2] = palette[3 * c + 2]; coloured++; }
+      }
+      this.coloured = coloured;
+    } else this.coloured = 0;
     this.ctx.putImageData(this.image, 0, 0);
+    if (decorate) decorate(this.ctx, width, height);
     this.frames += 1;
   }
 }

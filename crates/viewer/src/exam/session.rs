@@ -4,9 +4,9 @@
 
 use super::plan::ExamPlan;
 use super::sink::{CaseLog, RecordSink};
-use crate::exam_status::{CaseFeedback, ExamStatus, SiteStatus, TruthSegment};
+use crate::exam_status::{CaseFeedback, DopplerSiteStatus, ExamStatus, SiteStatus, TruthSegment};
 use echothigh_cases::Case;
-use echothigh_exam::{CaseExam, CaseExamError, ExamSample, Finding, LogError};
+use echothigh_exam::{CaseExam, CaseExamError, DopplerFinding, ExamSample, Finding, LogError};
 use std::time::Instant;
 
 /// Why an exam command was refused.
@@ -158,6 +158,16 @@ impl ExamSession {
         Ok(())
     }
 
+    /// The trainee calls the spectral Doppler at the Doppler site `site`
+    /// of the open case.
+    pub fn call_doppler(&mut self, site: &str, finding: DopplerFinding) -> Result<(), ExamError> {
+        let o = self.open.as_mut().ok_or(ExamError::NoCase)?;
+        let t = o.started.elapsed().as_secs_f64();
+        o.exam.call_doppler(site, finding, t, o.log.as_mut())?;
+        self.refresh();
+        Ok(())
+    }
+
     /// Finishes the open case: scores it and reveals its truth.
     pub fn finish(&mut self) -> Result<(), ExamError> {
         let mut o = self.open.take().ok_or(ExamError::NoCase)?;
@@ -243,6 +253,16 @@ impl ExamSession {
                         call: o.exam.call_at(&x.name),
                     })
                     .collect();
+                st.doppler = o
+                    .exam
+                    .doppler_sites()
+                    .iter()
+                    .map(|x| DopplerSiteStatus {
+                        name: x.name.clone(),
+                        vein: x.vein.clone(),
+                        call: o.exam.doppler_at(&x.name),
+                    })
+                    .collect();
                 st.coverage = o.exam.coverage().bins().to_vec();
                 st.presses = o.exam.events().len() as u32;
                 st.peak_force = o.exam.peak_force();
@@ -250,6 +270,7 @@ impl ExamSession {
             None => {
                 st.vignette = None;
                 st.sites.clear();
+                st.doppler.clear();
                 st.coverage.clear();
                 st.presses = 0;
                 st.peak_force = 0.0;

@@ -27,11 +27,14 @@ pub trait RecordSink: Send {
     }
 }
 
+/// Per case started: its name and its records, shared.
+pub type CaseLogs = Arc<Mutex<Vec<(String, Arc<Mutex<MemoryLog>>)>>>;
+
 /// Keeps every case's records in memory, readable by tests.
 #[derive(Clone, Default)]
 pub struct MemorySink {
     /// Per case started: its name and its records.
-    pub cases: Arc<Mutex<Vec<(String, Arc<Mutex<MemoryLog>>)>>>,
+    pub cases: CaseLogs,
 }
 
 /// A shared [`MemoryLog`].
@@ -43,6 +46,9 @@ impl ExamLog for SharedLog {
     }
     fn call(&mut self, c: &echothigh_exam::Call) -> Result<(), LogError> {
         self.lock().call(c)
+    }
+    fn doppler(&mut self, c: &echothigh_exam::DopplerCall) -> Result<(), LogError> {
+        self.lock().doppler(c)
     }
     fn finish(
         &mut self,

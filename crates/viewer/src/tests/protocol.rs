@@ -73,6 +73,7 @@ pub(super) fn sample_state() -> ViewState {
                 mean_force: 6.5,
                 sites: Vec::new(),
                 missed: Vec::new(),
+                doppler: Default::default(),
             },
             truth: vec![TruthSegment {
                 vein: "pv".into(),

@@ -16,7 +16,7 @@ use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio_tungstenite::tungstenite::{client::IntoClientRequest, Message};
 
-type Client =
+pub(super) type Client =
     tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
 
 /// Starts a server on a free loopback port; returns its address.
@@ -62,7 +62,7 @@ pub(super) async fn connect(addr: std::net::SocketAddr) -> Client {
 
 /// Next message of the connection (fails the test after 5 s), without
 /// acknowledging it.
-async fn next_raw(ws: &mut Client) -> Message {
+pub(super) async fn next_raw(ws: &mut Client) -> Message {
     tokio::time::timeout(Duration::from_secs(5), ws.next())
         .await
         .expect("no message within 5 s")
@@ -72,12 +72,18 @@ async fn next_raw(ws: &mut Client) -> Message {
 
 /// Next message of the connection; a state or an image is acknowledged at
 /// once, as a page that keeps up does (flow control).
-async fn next(ws: &mut Client) -> Message {
+pub(super) async fn next(ws: &mut Client) -> Message {
     let m = next_raw(ws).await;
     if let Message::Binary(b) = &m {
         if matches!(
             FrameHeader::parse(b),
-            Some((h, _)) if matches!(h.kind, FrameKind::ImagePng | FrameKind::ImageDelta)
+            Some((h, _)) if matches!(
+                h.kind,
+                FrameKind::ImagePng
+                    | FrameKind::ImageDelta
+                    | FrameKind::ImagePngFlow
+                    | FrameKind::ImageDeltaFlow
+            )
         ) {
             send(ws, r#"{"type":"image_ack"}"#).await;
         }
@@ -95,7 +101,10 @@ async fn next(ws: &mut Client) -> Message {
 }
 
 /// Next JSON message satisfying `pred`, skipping others.
-async fn next_json(ws: &mut Client, mut pred: impl FnMut(&ServerMessage) -> bool) -> ServerMessage {
+pub(super) async fn next_json(
+    ws: &mut Client,
+    mut pred: impl FnMut(&ServerMessage) -> bool,
+) -> ServerMessage {
     for _ in 0..500 {
         if let Message::Text(t) = next(ws).await {
             let env: Envelope = serde_json::from_str(t.as_str()).unwrap();
@@ -358,12 +367,12 @@ async fn exam_loads_a_case_detects_presses_and_reveals_on_finish() {
         .truth
         .iter()
         .any(|t| t.vein == "pv" && t.kind == "acute_occlusive"));
-    let cases = sink.cases.lock().unwrap();
-    let log = cases[0].1.lock().unwrap();
-    assert_eq!((log.events.len(), log.calls.len()), (2, 2));
-    assert_eq!(log.score.as_ref(), Some(&last.score));
-    drop(log);
-    drop(cases);
+    {
+        let cases = sink.cases.lock().unwrap();
+        let log = cases[0].1.lock().unwrap();
+        assert_eq!((log.events.len(), log.calls.len()), (2, 2));
+        assert_eq!(log.score.as_ref(), Some(&last.score));
+    }
     // Leaving the exam puts the practice leg back (the server's home case,
     // here the scenario's own leg): a new `hello` with its mesh, and the
     // vein control is the page's again.
@@ -613,7 +622,7 @@ async fn wait_watchers(fake: &FakeLive, n: usize) {
 }
 
 /// An 8-bit grayscale PNG's pixels.
-fn decode_png(png_bytes: &[u8]) -> Vec<u8> {
+pub(super) fn decode_png(png_bytes: &[u8]) -> Vec<u8> {
     let mut reader = png::Decoder::new(png_bytes).read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader.next_frame(&mut buf).unwrap();

@@ -72,8 +72,9 @@ fn state_json_is_unchanged_byte_for_byte() {
     // `seq` and `fault`, added last for issues 19 and 16; `level_s` and
     // `level`, the probe's place along the leg, for issue 12; `section`, the
     // imaged section's reading, for issue 13; the exam's case status for
-    // issue 14; `haptic_device`, the real device driving the probe, added
-    // last for issue 15 — this golden was updated deliberately for it).
+    // issue 14, with its Doppler sites and the score's Doppler part;
+    // `haptic_device`, the real device driving the probe, added last for
+    // issue 15 — this golden was updated deliberately for it).
     let expected = concat!(
         r#"{"v":1,"type":"state","time":1.25,"probe_position":[0.0,0.07,0.01],"#,
         r#""probe_orientation":[1.0,0.0,0.0,0.0],"device":[0.0,0.0,0.0],"#,
@@ -84,12 +85,13 @@ fn state_json_is_unchanged_byte_for_byte() {
         r#""level_s":0.2,"level":"femoral_canal","section":null,"#,
         r#""vein":"acute","exam":{"rev":7,"active":true,"trainee":"ada","protocol":"two-point","#,
         r#""recording":"not recorded (practice)","case_number":2,"cases_total":3,"open":false,"#,
-        r#""vignette":null,"sites":[],"coverage":[],"presses":0,"peak_force":0.0,"cases_done":2,"#,
+        r#""vignette":null,"sites":[],"doppler":[],"coverage":[],"presses":0,"peak_force":0.0,"cases_done":2,"#,
         r#""calls_correct":3,"calls_total":4,"last":{"case":"popliteal-acute","#,
         r#""title":"Popliteal thrombus","diagnosis":"acute_dvt","teaching":null,"#,
         r#""score":{"case":"popliteal-acute","protocol":"two-point","coverage":1.0,"#,
         r#""calls_correct":2,"calls_total":2,"pressure_adequate":1.0,"excessive_force_on_tail":0,"#,
-        r#""duration":61.5,"peak_force":14.0,"mean_force":6.5,"sites":[],"missed":[]},"#,
+        r#""duration":61.5,"peak_force":14.0,"mean_force":6.5,"sites":[],"missed":[],"#,
+        r#""doppler":{"correct":0,"total":0,"sites":[]}},"#,
         r#""truth":[{"vein":"pv","s_start":0.33,"s_end":0.37,"kind":"acute_occlusive"}],"#,
         r#""coverage":[]},"error":null},"observer":false,"seq":0,"fault":null,"haptic_device":null}"#
     );
