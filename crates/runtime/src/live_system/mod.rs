@@ -18,11 +18,11 @@
 //! reading of the section under the probe ([`crate::live::SectionReading`]).
 
 mod device_status;
-mod hardware_loop;
 mod doppler;
 mod doppler_control;
 #[cfg(test)]
 mod doppler_tests;
+mod hardware_loop;
 mod imaging_source;
 mod publish;
 mod session;
