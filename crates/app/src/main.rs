@@ -47,7 +47,7 @@ enum Command {
     Cases(cmd::cases::CasesCommand),
     /// The trainee's live web viewer (3D thigh, probe, image, force, exam mode).
     #[cfg(feature = "viewer")]
-    View(echothigh_viewer::Args),
+    View(cmd::view::ViewArgs),
     /// The scripted trainee (issue 14): an exam script on a case, headless on the virtual clock, and its score.
     Exam(cmd::exam::Args),
     /// List the real haptic-device backends: SDK found, devices, limits, or why not.
@@ -75,10 +75,7 @@ fn main() -> std::process::ExitCode {
         Command::Doppler(a) => cmd::doppler::run(a),
         Command::Experiment(c) => echothigh_experiments::run(c),
         #[cfg(feature = "viewer")]
-        Command::View(a) => match a.case.as_deref().map(cmd::cases::load_case).transpose() {
-            Ok(case) => echothigh_viewer::run(a, case),
-            Err(e) => Err(e),
-        },
+        Command::View(a) => cmd::view::run(a),
         Command::Anatomy(a) => cmd::anatomy::run(a),
         Command::Cases(c) => cmd::cases::run(c),
         Command::Devices(a) => cmd::devices::run(a),

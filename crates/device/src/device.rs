@@ -63,6 +63,12 @@ pub trait HapticDevice {
     fn clutched(&self) -> bool {
         false
     }
+    /// The SDK error code that stopped the device (unplugged, a lost
+    /// service, a driver fault), if it stopped: its force is zero from then
+    /// on and its pose holds the last good reading. Simulated devices never stop.
+    fn lost(&self) -> Option<u32> {
+        None
+    }
 }
 
 /// A boxed device is a device (the runtime drives `Box<dyn HapticDevice +
@@ -100,6 +106,9 @@ impl<T: HapticDevice + ?Sized> HapticDevice for Box<T> {
     }
     fn clutched(&self) -> bool {
         (**self).clutched()
+    }
+    fn lost(&self) -> Option<u32> {
+        (**self).lost()
     }
 }
 

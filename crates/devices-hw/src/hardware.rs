@@ -233,6 +233,10 @@ impl HapticDevice for HardwareDevice {
     fn clutched(&self) -> bool {
         self.clutch.engaged()
     }
+
+    fn lost(&self) -> Option<u32> {
+        self.fault()
+    }
 }
 
 impl Drop for HardwareDevice {

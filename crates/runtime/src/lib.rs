@@ -18,6 +18,7 @@ pub mod haptic_side;
 pub mod image_depth;
 pub mod integrity;
 pub mod live;
+pub mod live_device;
 pub mod live_doppler;
 pub mod live_system;
 pub mod physics_loop;

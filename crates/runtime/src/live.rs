@@ -205,6 +205,10 @@ pub struct LiveSnapshot {
     /// The last error of a thread of the live system (a stopped physics,
     /// link, haptic or imaging thread), in plain words; `None` when all run.
     pub fault: Option<String>,
+    /// The real haptic device driving the probe (issue 15); `None` while
+    /// the page drives it.
+    #[serde(default)]
+    pub haptic_device: Option<crate::live_device::LiveDeviceStatus>,
 }
 
 /// A command from a front end. Every numeric field is checked by
@@ -440,6 +444,13 @@ pub trait LiveControl: Send + Sync {
     fn set_case(&self, case: Option<&echothigh_cases::Case>) -> Result<(), String> {
         let _ = case;
         Err("this live runtime cannot load cases".into())
+    }
+    /// The name of the real haptic device driving the probe (issue 15),
+    /// if one does: the page's probe commands (`probe`, `lift`,
+    /// `play_exam`) are then refused
+    /// ([`crate::live_system::device_drives_message`]).
+    fn driving_device(&self) -> Option<String> {
+        None
     }
     /// Applies a Doppler command (issue 17, [`crate::live_doppler`]); a
     /// runtime without a flow model refuses.

@@ -44,6 +44,11 @@ pub const ASSETS: &[Asset] = &[
         body: include_bytes!("../assets/web/panels.js"),
     },
     Asset {
+        path: "/device.js",
+        content_type: JS,
+        body: include_bytes!("../assets/web/device.js"),
+    },
+    Asset {
         path: "/exam.js",
         content_type: JS,
         body: include_bytes!("../assets/web/exam.js"),

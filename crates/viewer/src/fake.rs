@@ -9,6 +9,7 @@ use echothigh_runtime::live::{
     LiveStatus, VeinState,
 };
 use echothigh_runtime::live::{SectionReading, COAPTED_RATIO};
+use echothigh_runtime::live_device::LiveDeviceStatus;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{mpsc, Mutex};
 use std::time::Duration;
@@ -35,6 +36,8 @@ struct Inner {
     commands: Vec<LiveCommand>,
     /// The loaded case ([`LiveControl::set_case`]).
     case: Option<Case>,
+    /// A real device driving the probe (issue 15), as the live system reports it.
+    device: Option<LiveDeviceStatus>,
 }
 
 /// A [`LiveControl`] for tests.
@@ -64,6 +67,12 @@ impl FakeLive {
             i.rate = 100.0;
         }
         f
+    }
+
+    /// Attaches a device that drives the probe (the page's probe commands
+    /// are then refused by the server), reported with every snapshot.
+    pub fn attach_device(&self, status: LiveDeviceStatus) {
+        self.inner.lock().unwrap().device = Some(status);
     }
 
     /// The loaded case's name.
@@ -180,6 +189,16 @@ impl LiveControl for FakeLive {
             level: None,
             section: i.case.as_ref().map(|c| reading(c, z0, f, out.status.time)),
         };
+        out.haptic_device.clone_from(&i.device);
+    }
+
+    fn driving_device(&self) -> Option<String> {
+        self.inner
+            .lock()
+            .unwrap()
+            .device
+            .as_ref()
+            .map(|d| d.name.clone())
     }
 
     fn image(&self, out: &mut Vec<u8>) -> ImageInfo {

@@ -112,11 +112,24 @@ pub fn run_with(
     case: Option<echothigh_cases::Case>,
     session: ExamSession,
 ) -> Result<()> {
+    run_with_device(args, case, session, None)
+}
+
+/// [`run_with`] with `device` (issue 15, `--device NAME`), when given,
+/// driving the probe instead of the page
+/// ([`LiveSystem::start_with_device`]): the page shows its clutch, its
+/// force and its workspace, and its probe controls are refused.
+pub fn run_with_device(
+    args: Args,
+    case: Option<echothigh_cases::Case>,
+    session: ExamSession,
+    device: Option<echothigh_runtime::live_device::LiveDevice>,
+) -> Result<()> {
     check_bind(args.bind, args.allow_remote)?;
     check_rate(args.rate)?;
     let idle_timeout = check_idle_timeout(args.idle_timeout)?;
     let scenario = Scenario::load(args.scenario.as_deref())?;
-    let system = LiveSystem::start_with_case(scenario, case.as_ref())
+    let system = LiveSystem::start_with_device(scenario, case.as_ref(), device)
         .context("starting the live simulation")?;
     let control: Arc<dyn LiveControl> = system.clone();
     let config = ServerConfig {

@@ -21,6 +21,7 @@
 
 use echothigh_exam::Finding;
 use echothigh_runtime::live::{LiveCommand, LiveMesh, LiveSnapshot, LiveStatus, VeinState};
+use echothigh_runtime::live_device::LiveDeviceStatus;
 use echothigh_runtime::live_doppler::{DopplerCommand, DopplerStatus, DOPPLER_COMMAND_TYPES};
 use serde::{Deserialize, Serialize};
 
@@ -102,6 +103,11 @@ pub struct ViewState {
     pub seq: u64,
     /// A thread of the simulation stopped, in plain words (`None`: all run).
     pub fault: Option<String>,
+    /// The real haptic device driving the probe (issue 15): its clutch, its
+    /// force (N, device units) next to the tissue force, its workspace in
+    /// the thigh frame, whether it still answers; `None` while the page's
+    /// mouse drives.
+    pub haptic_device: Option<LiveDeviceStatus>,
     /// The Doppler mode, scales, gate and manoeuvres (issue 17); absent
     /// when the live system has no flow model.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -124,6 +130,7 @@ impl ViewState {
             observer: false,
             seq: 0,
             fault: snap.fault.clone(),
+            haptic_device: snap.haptic_device.as_ref().map(|d| d.sanitized()),
             doppler: None,
         }
     }

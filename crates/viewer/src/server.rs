@@ -132,6 +132,13 @@ impl AppState {
                 "the vein is the case's during an exam: finish the case or leave the exam first"
                     .into(),
             ),
+            // A real device drives the probe (issue 15): the page only watches it.
+            ClientMessage::Live(
+                LiveCommand::Probe { .. } | LiveCommand::Lift | LiveCommand::PlayExam,
+            ) if self.control.driving_device().is_some() => {
+                let name = self.control.driving_device().unwrap_or_default();
+                Err(echothigh_runtime::live_system::device_drives_message(&name))
+            }
             ClientMessage::Live(cmd @ LiveCommand::Probe { .. }) => {
                 self.control.command(cmd)?;
                 self.exam().trainee_pressed();

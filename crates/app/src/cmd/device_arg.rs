@@ -5,7 +5,7 @@
 
 use anyhow::{Context, Result};
 use echothigh_device::{DeviceKindSetting, HapticDevice};
-use echothigh_devices_hw::{open_device, DeviceKind, HardwareConfig};
+use echothigh_devices_hw::{open_hardware, DeviceKind, HardwareConfig, HardwareDevice};
 use std::path::PathBuf;
 
 /// The device a run drives.
@@ -80,6 +80,14 @@ impl DeviceArgs {
         &self,
         scenario: DeviceKindSetting,
     ) -> Result<Option<Box<dyn HapticDevice + Send>>> {
+        Ok(self
+            .open_hardware(scenario)?
+            .map(|d| Box::new(d) as Box<dyn HapticDevice + Send>))
+    }
+
+    /// [`DeviceArgs::open`], the concrete device (its description,
+    /// calibration and diagnostics).
+    pub fn open_hardware(&self, scenario: DeviceKindSetting) -> Result<Option<HardwareDevice>> {
         let Some(kind) = self.chosen(scenario).kind() else {
             if self.hardware.is_some() {
                 anyhow::bail!(
@@ -96,7 +104,7 @@ impl DeviceArgs {
                 toml::from_str(&text).with_context(|| format!("{}", path.display()))?
             }
         };
-        let device = open_device(&kind, &config).with_context(|| {
+        let device = open_hardware(kind, &config).with_context(|| {
             format!("opening the {kind} device (`echothigh devices` lists what is installed)")
         })?;
         Ok(Some(device))

@@ -67,6 +67,10 @@ pub struct Args {
     /// Viewer: allow binding a non-loopback address (a classroom station).
     #[arg(long)]
     pub allow_remote: bool,
+    /// Viewer: the haptic device that drives the probe (issue 15; default
+    /// the page's mouse).
+    #[command(flatten)]
+    pub device: super::device_arg::DeviceArgs,
 }
 
 /// One call in the JSON.
@@ -105,6 +109,9 @@ pub fn run(args: Args) -> Result<()> {
         return super::exam_live::run(&args);
         #[cfg(not(feature = "viewer"))]
         bail!("this echothigh was built without the viewer: only `exam --script FILE --case NAME` runs");
+    }
+    if args.device.device.is_some() || args.device.hardware.is_some() {
+        bail!("--device and --hardware go with the viewer's exam (--trainee NAME without --script): a scripted exam has no hand on a device");
     }
     let (script, case) = load(&args)?;
     let mut log = MemoryLog::default();

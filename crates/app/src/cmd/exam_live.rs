@@ -74,6 +74,9 @@ pub fn run(args: &Args) -> Result<()> {
         protocol,
         cases: cases(args)?,
     };
+    // The device before the database: a missing driver is said first.
+    let kind = echothigh_runtime::scenario::Scenario::default().device.kind;
+    let device = super::live_device::open(&args.device, kind)?;
     let store = BlockingStore::open(args.db.as_deref())?;
     let sink = echothigh_viewer::DbSink::new(store, trainee)?;
     eprintln!(
@@ -92,5 +95,5 @@ pub fn run(args: &Args) -> Result<()> {
         idle_timeout: 60.0,
         case: None,
     };
-    echothigh_viewer::run_with(view, None, session)
+    echothigh_viewer::run_with_device(view, None, session, device)
 }

@@ -13,7 +13,11 @@ pub mod exam;
 pub mod exam_live;
 pub mod image;
 pub mod image_site;
+#[cfg(feature = "viewer")]
+pub mod live_device;
 pub mod net;
 pub mod psf;
 pub mod report;
 pub mod run;
+#[cfg(feature = "viewer")]
+pub mod view;

@@ -17,19 +17,25 @@
 //! thrombus segments; the imaging thread publishes, with each frame, a
 //! reading of the section under the probe ([`crate::live::SectionReading`]).
 
+mod device_status;
 mod doppler;
 mod doppler_control;
 #[cfg(test)]
 mod doppler_tests;
+mod hardware_loop;
 mod imaging_source;
 mod publish;
 mod session;
 mod shared;
 
+pub use device_status::device_drives_message;
+pub use hardware_loop::{DeviceLoop, SkinNormal};
+
 use crate::live::{
     CommandLimits, CouplingMode, ImageInfo, LiveCommand, LiveControl, LiveMesh, LiveSnapshot,
     VeinState,
 };
+use crate::live_device::{LiveDevice, LiveDeviceInfo};
 use crate::physics_side::PhysicsSide;
 use crate::scenario::Scenario;
 use anyhow::{Context, Result};
@@ -110,6 +116,8 @@ pub struct LiveSystem {
     inner: Mutex<Inner>,
     settings: Mutex<Settings>,
     imaging: Mutex<Option<ImagingThread>>,
+    /// The real device driving the probe, when one is attached (issue 15).
+    device_info: Option<LiveDeviceInfo>,
     /// The live flow's controls, lines and status (issue 17).
     doppler: Arc<doppler::DopplerShared>,
 }
@@ -183,6 +191,23 @@ impl LiveSystem {
     /// thrombus segments ([`LiveSystem::set_case`]), or on the scenario's
     /// own leg for `None`.
     pub fn start_with_case(scenario: Scenario, case: Option<&Case>) -> Result<Arc<Self>> {
+        Self::start_with_device(scenario, case, None)
+    }
+
+    /// [`LiveSystem::start_with_case`] with `device` (issue 15), when given,
+    /// driving the probe instead of the page: the one haptic tick reads it
+    /// (calibrated into the thigh frame by its opener), the page's probe
+    /// commands are refused while it is attached, and each snapshot carries
+    /// its state ([`LiveSnapshot::haptic_device`]).
+    pub fn start_with_device(
+        scenario: Scenario,
+        case: Option<&Case>,
+        device: Option<LiveDevice>,
+    ) -> Result<Arc<Self>> {
+        let (hardware, device_info) = match device {
+            Some(d) => (Some(d.device), Some(d.info)),
+            None => (None, None),
+        };
         let base_thigh = scenario.thigh.clone();
         let mut scenario = scenario;
         if let Some(c) = case {
@@ -221,6 +246,7 @@ impl LiveSystem {
             section: Mutex::new(None),
             watchers: AtomicUsize::new(0),
             fault: Mutex::new(None),
+            device: Mutex::new(None),
         });
         let leg = physics.model().mesh().leg().cloned();
         let target = target_on_surface(&scenario, leg.as_ref(), 0.0, 0.0, LIFTED_DEPTH, 0.0)
@@ -249,6 +275,7 @@ impl LiveSystem {
             settings: Mutex::new(Settings::of(&inner)),
             inner: Mutex::new(inner),
             imaging: Mutex::new(Some(imaging)),
+            device_info,
             doppler,
         });
         {
@@ -256,7 +283,11 @@ impl LiveSystem {
                 .inner
                 .lock()
                 .map_err(|_| anyhow::anyhow!("live state poisoned"))?;
-            system.restart(&mut inner, Keep::Nothing)?;
+            let carried = Carried {
+                hardware,
+                ..Carried::default()
+            };
+            system.start_from(&mut inner, carried, true)?;
         }
         Ok(system)
     }
@@ -273,7 +304,13 @@ impl LiveSystem {
     fn restart(&self, inner: &mut Inner, keep: Keep) -> Result<()> {
         let mut carried = inner.session.take().map(Session::stop).unwrap_or_default();
         match keep {
-            Keep::Nothing => carried = Carried::default(),
+            // A real device stays attached whatever restarts.
+            Keep::Nothing => {
+                carried = Carried {
+                    hardware: carried.hardware.take(),
+                    ..Carried::default()
+                }
+            }
             Keep::Thigh => carried.device = None,
             Keep::ThighAndProbe => {}
         }
@@ -282,6 +319,13 @@ impl LiveSystem {
 
     /// Starts a session from `carried` (the thigh at rest when `at_rest`).
     fn start_from(&self, inner: &mut Inner, carried: Carried, at_rest: bool) -> Result<()> {
+        if let (Some(info), None) = (&self.device_info, &carried.hardware) {
+            anyhow::bail!(
+                "the haptic device ({}) was released when its haptic thread stopped abnormally: \
+                 restart echothigh to drive it again",
+                info.name
+            );
+        }
         if let Ok(mut f) = self.shared.fault.lock() {
             *f = None;
         }
@@ -304,6 +348,7 @@ impl LiveSystem {
             inner.exam,
             inner.target,
             carried,
+            self.device_info.as_ref().map_or("", |i| i.name.as_str()),
         )?);
         Ok(())
     }
@@ -363,9 +408,7 @@ impl LiveSystem {
                 tracing::warn!("the imaging thread of the previous case: {e:#}");
             }
         }
-        if let Some(s) = inner.session.take() {
-            s.stop();
-        }
+        let hardware = inner.session.take().and_then(|s| s.stop().hardware);
         if let Ok(mut m) = self.shared.mesh.lock() {
             *m = live_mesh(&physics);
         }
@@ -384,6 +427,7 @@ impl LiveSystem {
         let carried = Carried {
             physics: Some(physics),
             device: None,
+            hardware,
         };
         self.start_from(&mut inner, carried, true)?;
         self.doppler.set_case(case);
@@ -482,6 +526,7 @@ impl LiveControl for LiveSystem {
                 };
             }
         }
+        out.haptic_device = self.device_status();
         if out.status.mode == Some(CouplingMode::Direct) {
             // The physics steps in the haptic loop: its achieved rate is the
             // loop's, not the setting (issue 19: "1000 Hz" shown at 652).
@@ -556,6 +601,10 @@ impl LiveControl for LiveSystem {
         }
     }
 
+    fn driving_device(&self) -> Option<String> {
+        self.device_info.as_ref().map(|i| i.name.clone())
+    }
+
     fn page_opened(&self) {
         self.shared.watchers.fetch_add(1, Ordering::AcqRel);
         if let Ok(Some(t)) = self.imaging.lock().as_deref() {
@@ -578,6 +627,14 @@ impl LiveControl for LiveSystem {
             .map_err(|_| "live state poisoned".to_string())?;
         cmd.validate(&limits_of(&inner.scenario))
             .map_err(|e| e.to_string())?;
+        if let Some(info) = &self.device_info {
+            if matches!(
+                cmd,
+                LiveCommand::Probe { .. } | LiveCommand::Lift | LiveCommand::PlayExam
+            ) {
+                return Err(device_drives_message(&info.name));
+            }
+        }
         let applied = self.apply(&mut inner, cmd);
         self.publish_settings(&inner);
         applied

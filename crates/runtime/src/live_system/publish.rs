@@ -350,6 +350,7 @@ mod tests {
             vein: AtomicU8::new(0),
             haptic: Mutex::new(None),
             section: Mutex::new(None),
+            device: Mutex::new(None),
             watchers: AtomicUsize::new(1),
             fault: Mutex::new(None),
         });

@@ -6,6 +6,7 @@
 //! that changing the coupling mode, the physics rate or the latency keeps the
 //! probe where it is, pressed as it was, instead of restarting from rest.
 
+use super::hardware_loop::{self, BoxedDevice, DeviceLoop, SkinNormal};
 use super::publish::Publisher;
 use super::shared::{HandTarget, HapticStatus, Shared};
 use crate::haptic_side::{haptic_side_for, SampleSink};
@@ -42,6 +43,16 @@ pub(super) struct Carried {
     pub physics: Option<PhysicsSide>,
     /// The device and hand (none: start at the hand's target, at rest).
     pub device: Option<DeviceState>,
+    /// The real device driving the probe (issue 15), when one is attached.
+    pub hardware: Option<BoxedDevice>,
+}
+
+/// What drove the probe in a session, handed back when it stops.
+pub(super) enum Driver {
+    /// The simulated device and hand, following the page or the script.
+    Hand(DeviceState),
+    /// A real device.
+    Hardware(BoxedDevice),
 }
 
 /// The running threads of one session.
@@ -50,7 +61,7 @@ pub(super) struct Session {
     /// The physics thread (none in `direct` mode, where the haptic loop steps it).
     physics: Option<JoinHandle<PhysicsSide>>,
     /// The haptic loop: returns the physics it stepped (`direct`) and the device.
-    haptic: JoinHandle<(Option<PhysicsSide>, DeviceState)>,
+    haptic: JoinHandle<(Option<PhysicsSide>, Driver)>,
     others: Vec<JoinHandle<()>>,
     /// The hand's target, read by the haptic loop.
     pub target: triple_buffer::Input<HandTarget>,
@@ -70,28 +81,35 @@ impl Session {
         let threaded = self
             .physics
             .and_then(|h| h.join().map_err(|_| panicked("physics")).ok());
-        let (direct, device) = match self.haptic.join() {
-            Ok((p, d)) => (p, Some(d)),
+        let (direct, device, hardware) = match self.haptic.join() {
+            Ok((p, Driver::Hand(d))) => (p, Some(d), None),
+            Ok((p, Driver::Hardware(h))) => (p, None, Some(h)),
             Err(_) => {
+                // A real device unwound with the thread: its drop released it.
                 panicked("haptic");
-                (None, None)
+                (None, None, None)
             }
         };
         Carried {
             physics: threaded.or(direct),
             device,
+            hardware,
         }
     }
 }
 
 /// Starts the threads of a session for `scenario`, continuing from `carried`
 /// (the thigh's state, and the device's unless the exam script drives it).
+/// With `carried.hardware` the real device drives the probe (its name,
+/// `device_name`, for the page); else the simulated hand follows `target`
+/// or the exam script.
 pub(super) fn start_session(
     shared: &Arc<Shared>,
     scenario: &Scenario,
     exam: bool,
     target: HandTarget,
     carried: Carried,
+    device_name: &str,
 ) -> Result<Session> {
     let c = scenario.coupling.clone();
     let stop = Arc::new(AtomicBool::new(false));
@@ -101,6 +119,23 @@ pub(super) fn start_session(
         .haptic
         .lock()
         .map_err(|_| anyhow::anyhow!("live state poisoned"))? = Some(status_out);
+    let mut hardware = carried.hardware;
+    let (device_in, device_out) = if hardware.is_some() {
+        let (i, o) = triple_buffer::triple_buffer(&Default::default());
+        (Some(i), Some(o))
+    } else {
+        (None, None)
+    };
+    *shared
+        .device
+        .lock()
+        .map_err(|_| anyhow::anyhow!("live state poisoned"))? = device_out;
+    let exam = exam && hardware.is_none();
+    // Before any thread starts: an error here loses nothing.
+    let skin = hardware
+        .as_ref()
+        .map(|_| SkinNormal::of(scenario))
+        .transpose()?;
     let device = if exam {
         let script = ExamScript::new(scenario.exam_script_config()?).map_err(anyhow::Error::msg)?;
         let hand = SimulatedHand::scripted(scenario.hand, script).map_err(anyhow::Error::msg)?;
@@ -194,6 +229,27 @@ pub(super) fn start_session(
     );
     let mut runner = LoopRunner::new(&loop_cfg).map_err(anyhow::Error::msg)?;
     let period = 1.0 / loop_cfg.rate_hz;
+    let observer = LiveObserver::new(pos_in, status_in, publisher, period);
+    if let (Some(hw), Some(device_in), Some(skin)) = (hardware.take(), device_in, skin) {
+        let tick = HapticTick::new(hw, source, scale, direct_physics.take(), period);
+        let device_loop = DeviceLoop::new(tick, observer, skin, device_in, target.orientation);
+        let haptic = hardware_loop::spawn(
+            device_loop,
+            runner,
+            clock,
+            stop.clone(),
+            shared.clone(),
+            device_name.to_string(),
+        )?;
+        return Ok(Session {
+            stop,
+            physics: physics_thread,
+            haptic,
+            others,
+            target: target_in,
+        });
+    }
+    let mut observer = observer;
     let mut tick = HapticTick::new(device, source, scale, direct_physics.take(), period);
     if exam {
         tick.set_orientation(scenario.probe_orientation()?);
@@ -201,16 +257,6 @@ pub(super) fn start_session(
     if let Some(h) = tick.device_mut().hand_mut() {
         h.set_setpoint(start_setpoint, Vec3::zeros());
     }
-    let mut observer = LiveObserver {
-        pose: pos_in,
-        status: status_in,
-        publisher,
-        last_publish: -1.0,
-        late: 0,
-        ticks: 0,
-        last_tick: None,
-        period,
-    };
     let haptic = std::thread::Builder::new()
         .name("haptic-loop".into())
         .spawn(move || {
@@ -240,7 +286,7 @@ pub(super) fn start_session(
                 setpoint,
             };
             let (_, direct) = tick.into_parts();
-            (direct, state)
+            (direct, Driver::Hand(state))
         })
         .context("starting the haptic loop")?;
     Ok(Session {
@@ -259,7 +305,7 @@ pub(super) fn start_session(
 /// Not a real-time FIFO policy: the loop's sleeper spins its last ~100 µs,
 /// and a FIFO thread spinning would starve the physics thread. Failure is
 /// logged, not fatal.
-fn raise_priority() {
+pub(super) fn raise_priority() {
     use thread_priority::{set_current_thread_priority, ThreadPriority};
     match set_current_thread_priority(ThreadPriority::Max) {
         Ok(()) => tracing::info!("haptic loop at the highest time-sharing priority"),
@@ -274,7 +320,7 @@ const HAND_REACH_SPEED: f64 = 0.2;
 /// The live haptic loop's observer: the pose to the link thread, the status
 /// to the page (both lock-free single-slot handoffs), and in `direct`
 /// coupling the physics state to the publisher every 30 ms.
-struct LiveObserver {
+pub(super) struct LiveObserver {
     pose: triple_buffer::Input<(f64, ProbeMsg, bool)>,
     status: triple_buffer::Input<HapticStatus>,
     publisher: Publisher,
@@ -283,6 +329,26 @@ struct LiveObserver {
     ticks: u64,
     last_tick: Option<f64>,
     period: f64,
+}
+
+impl LiveObserver {
+    fn new(
+        pose: triple_buffer::Input<(f64, ProbeMsg, bool)>,
+        status: triple_buffer::Input<HapticStatus>,
+        publisher: Publisher,
+        period: f64,
+    ) -> Self {
+        LiveObserver {
+            pose,
+            status,
+            publisher,
+            last_publish: -1.0,
+            late: 0,
+            ticks: 0,
+            last_tick: None,
+            period,
+        }
+    }
 }
 
 impl TickObserver for LiveObserver {

@@ -95,6 +95,9 @@ pub(super) struct Shared {
     /// The last error of a thread of the live system, for the page; cleared
     /// when a new session starts.
     pub fault: Mutex<Option<String>>,
+    /// The real device's handoff of the running session (`None` while the
+    /// page drives the probe).
+    pub device: Mutex<Option<triple_buffer::Output<crate::live_device::DeviceTick>>>,
 }
 
 impl Shared {
@@ -104,6 +107,14 @@ impl Shared {
         tracing::error!("live {thread} thread stopped: {error:#}");
         if let Ok(mut f) = self.fault.lock() {
             *f = Some(format!("the {thread} thread stopped: {error:#}"));
+        }
+    }
+
+    /// Reports a fault in plain words (logged, and kept for the page).
+    pub fn report(&self, message: String) {
+        tracing::error!("{message}");
+        if let Ok(mut f) = self.fault.lock() {
+            *f = Some(message);
         }
     }
 }

@@ -5,6 +5,7 @@
 import { ThighScene } from './scene.js';
 import { EchoView, ForcePlot, Gauge, drawDepthScale, norm, showStatus } from './panels.js';
 import { showExam } from './exam.js';
+import { deviceDrives, showDevice } from './device.js';
 import { Guide } from './guide.js';
 import { setupDoppler } from './doppler.js';
 
@@ -212,7 +213,8 @@ function onState(s) {
   showStatus(s, renderedFps);
   syncControls(s);
   showExam(s.exam, s.level_s, send);
-  guide.update(s, live.probe);
+  showDevice(s, scene);
+  guide.update(s, live.probe, deviceDrives(s));
   doppler.update(s.doppler);
   $('observer').hidden = !s.observer;
   showBehind(s);
@@ -259,7 +261,8 @@ $('toast').addEventListener('click', () => $('toast').classList.add('hidden'));
 let probeDirty = false;
 function sendProbeSoon() { probeDirty = true; }
 function flushProbe() {
-  if (!probeDirty || !live.probe.placed) return;
+  // A haptic device drives the probe: the page only watches (issue 15).
+  if (!probeDirty || !live.probe.placed || deviceDrives(live.state)) return;
   probeDirty = false;
   const p = live.probe;
   send({ type: 'probe', theta: p.theta, z: p.z, depth: p.depth, tilt: p.tilt });
@@ -275,6 +278,7 @@ function setTilt(t) {
   sendProbeSoon();
 }
 function lift() {
+  if (deviceDrives(live.state)) return;
   live.probe.placed = false;
   send({ type: 'lift' });
 }
@@ -284,7 +288,7 @@ let drag = null; // {mode: 'probe' | 'orbit', x, y}
 canvas.addEventListener('contextmenu', (e) => e.preventDefault());
 canvas.addEventListener('pointerdown', (e) => {
   canvas.setPointerCapture(e.pointerId);
-  const hit = scene && e.button === 0 ? scene.pick(e.clientX, e.clientY) : null;
+  const hit = scene && e.button === 0 && !deviceDrives(live.state) ? scene.pick(e.clientX, e.clientY) : null;
   if (hit) {
     if (live.state && live.state.exam_playing) send({ type: 'stop_exam' });
     Object.assign(live.probe, hit, { placed: true });

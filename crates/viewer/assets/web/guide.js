@@ -20,22 +20,27 @@ const KEY = 'echothigh.guide.done';
 const STEPS = [
   {
     text: 'Place the probe on the skin: click or drag on the thigh (or Tab to the view and press Enter).',
+    device: 'Place the probe on the skin: move the device\'s stylus until the probe touches the thigh.',
     done: (s, p) => p.placed && s.force > TOUCH_N,
   },
   {
     text: 'Find the vein: the image shows it as a dark oval beside its round, pulsing artery. Drag along the thigh (or ↑/↓) to follow it.',
+    device: 'Find the vein: the image shows it as a dark oval beside its round, pulsing artery. Slide the stylus along the thigh to follow it.',
     done: (s) => s.section !== null,
   },
   {
     text: 'Press (wheel, or W) until the vein\'s walls meet. A vein that stays open while its artery starts to flatten holds a clot.',
+    device: 'Press into the thigh until the vein\'s walls meet. A vein that stays open while its artery starts to flatten holds a clot.',
     done: (s) => s.section !== null && (s.section.walls_met || s.section.artery_lumen_ratio < ARTERY_CUE),
   },
   {
     text: 'Release (wheel back, or S) until the force is near zero: the vein opens again.',
+    device: 'Release until the force is near zero: the vein opens again.',
     done: (s) => s.force < RELEASED_N,
   },
   {
     text: 'Step 1–2 cm along the leg (drag, or ↑/↓) and press again: every site of the exam is pressed like this.',
+    device: 'Step 1–2 cm along the leg (clutch and reposition your hand if you run out of reach) and press again: every site of the exam is pressed like this.',
     done: (s, p, g) => s.section !== null && g.at !== null && Math.abs(s.section.s - g.at) > STEP_M,
   },
 ];
@@ -48,6 +53,7 @@ export class Guide {
     this.reopen = reopen;
     this.step = 0;
     this.at = null; // where along the leg (m) the walls were pressed
+    this.device = false; // a haptic device drives the probe (issue 15): its texts
     let seen = false;
     try { seen = localStorage.getItem(KEY) === '1'; } catch { /* storage off: show it */ }
     this.active = !seen;
@@ -57,11 +63,16 @@ export class Guide {
     this.show();
   }
 
-  /** Ticks the current step off from the state `s` and the page's probe `p`. */
-  update(s, p) {
+  /**
+   * Ticks the current step off from the state `s` and the page's probe `p`;
+   * `device`: a haptic device drives the probe (its probe is always placed:
+   * it touches the skin when the force says so), and the steps say how with it.
+   */
+  update(s, p, device = false) {
+    if (device !== this.device) { this.device = device; this.show(); }
     if (!this.active) return;
     const view = { force: Math.hypot(...s.physics_force), section: s.section || null };
-    if (!STEPS[this.step].done(view, p, this)) return;
+    if (!STEPS[this.step].done(view, device ? { placed: true } : p, this)) return;
     if (this.step === 2 && view.section) this.at = view.section.s;
     this.advance();
   }
@@ -85,6 +96,7 @@ export class Guide {
     if (!this.active) return;
     this.root.dataset.step = String(this.step + 1);
     this.root.querySelector('.guide-n').textContent = `Step ${this.step + 1} of ${STEPS.length}`;
-    this.root.querySelector('.guide-text').textContent = STEPS[this.step].text;
+    const step = STEPS[this.step];
+    this.root.querySelector('.guide-text').textContent = this.device ? step.device : step.text;
   }
 }

@@ -2,6 +2,7 @@
 //! page messages), the state message's JSON as the page reads it, and the
 //! server end to end over a real WebSocket.
 
+mod device;
 mod doppler;
 mod protocol;
 mod server;

@@ -8,7 +8,7 @@ use super::protocol::sample_state;
 /// `msg.type` in `app.js`'s `onJson`, the rest as `s.<key>` in `onState`,
 /// `syncControls` (app.js), `showStatus` (panels.js) and `updateState`
 /// (scene.js).
-const PAGE_STATE_KEYS: [&str; 26] = [
+const PAGE_STATE_KEYS: [&str; 27] = [
     "v",
     "type",
     "time",
@@ -35,6 +35,7 @@ const PAGE_STATE_KEYS: [&str; 26] = [
     "observer",
     "seq",
     "fault",
+    "haptic_device",
 ];
 
 #[test]
@@ -71,7 +72,9 @@ fn state_json_is_unchanged_byte_for_byte() {
     // `seq` and `fault`, added last for issues 19 and 16; `level_s` and
     // `level`, the probe's place along the leg, for issue 12; `section`, the
     // imaged section's reading, for issue 13; the exam's case status for
-    // issue 14, with its Doppler sites and the score's Doppler part).
+    // issue 14, with its Doppler sites and the score's Doppler part;
+    // `haptic_device`, the real device driving the probe, added last for
+    // issue 15 — this golden was updated deliberately for it).
     let expected = concat!(
         r#"{"v":1,"type":"state","time":1.25,"probe_position":[0.0,0.07,0.01],"#,
         r#""probe_orientation":[1.0,0.0,0.0,0.0],"device":[0.0,0.0,0.0],"#,
@@ -90,8 +93,65 @@ fn state_json_is_unchanged_byte_for_byte() {
         r#""duration":61.5,"peak_force":14.0,"mean_force":6.5,"sites":[],"missed":[],"#,
         r#""doppler":{"correct":0,"total":0,"sites":[]}},"#,
         r#""truth":[{"vein":"pv","s_start":0.33,"s_end":0.37,"kind":"acute_occlusive"}],"#,
-        r#""coverage":[]},"error":null},"observer":false,"seq":0,"fault":null}"#
+        r#""coverage":[]},"error":null},"observer":false,"seq":0,"fault":null,"haptic_device":null}"#
     );
     let text = serde_json::to_string(&Envelope::new(ServerMessage::State(sample_state()))).unwrap();
     assert_eq!(text, expected);
+}
+
+#[test]
+fn the_device_status_json_is_pinned() {
+    // Issue 15: what the page's `device.js` reads of `haptic_device`, byte
+    // for byte (a lost device: `connected` false, its reason in `lost`).
+    use echothigh_runtime::live_device::LiveDeviceStatus;
+    let mut corners = [[0.0; 3]; 8];
+    for (i, c) in corners.iter_mut().enumerate() {
+        *c = [
+            (i & 1) as f64 * 0.5,
+            ((i >> 1) & 1) as f64 * 0.25,
+            ((i >> 2) & 1) as f64 * 0.125,
+        ];
+    }
+    let mut state = sample_state();
+    state.haptic_device = Some(LiveDeviceStatus {
+        name: "openhaptics: Touch".into(),
+        connected: false,
+        clutched: true,
+        force: [0.0, 1.5, f64::NAN],
+        max_force: 3.3,
+        orientation_sensed: true,
+        workspace: Some(corners),
+        lost: Some("gone".into()),
+    });
+    // The sanitizing of `ViewState::from_snapshot` is what the server sends.
+    let d = state.haptic_device.as_ref().unwrap().sanitized();
+    let text = serde_json::to_string(&d).unwrap();
+    let expected = concat!(
+        r#"{"name":"openhaptics: Touch","connected":false,"clutched":true,"force":[0.0,1.5,0.0],"#,
+        r#""max_force":3.3,"orientation_sensed":true,"workspace":[[0.0,0.0,0.0],[0.5,0.0,0.0],"#,
+        r#"[0.0,0.25,0.0],[0.5,0.25,0.0],[0.0,0.0,0.125],[0.5,0.0,0.125],[0.0,0.25,0.125],"#,
+        r#"[0.5,0.25,0.125]],"lost":"gone"}"#
+    );
+    assert_eq!(text, expected);
+    // Every key is read by the page's device.js.
+    let js = crate::assets::ASSETS
+        .iter()
+        .find(|a| a.path == "/device.js")
+        .map(|a| String::from_utf8_lossy(a.body).into_owned())
+        .unwrap();
+    for key in [
+        "name",
+        "connected",
+        "clutched",
+        "force",
+        "max_force",
+        "orientation_sensed",
+        "workspace",
+        "lost",
+    ] {
+        assert!(
+            js.contains(&format!("d.{key}")),
+            "device.js never reads `{key}`"
+        );
+    }
 }
