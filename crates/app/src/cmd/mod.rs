@@ -15,5 +15,6 @@ pub mod image;
 pub mod image_site;
 pub mod net;
 pub mod psf;
+pub mod records;
 pub mod report;
 pub mod run;
