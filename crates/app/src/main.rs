@@ -54,6 +54,9 @@ enum Command {
     Devices(cmd::devices::Args),
     /// A trainee's exam record as an HTML page with plots (from the records database).
     Report(cmd::report::Args),
+    /// The records database: replay the fallback journal of an exam whose database failed.
+    #[command(subcommand)]
+    Records(cmd::records::RecordsCommand),
 }
 
 fn main() -> std::process::ExitCode {
@@ -81,6 +84,7 @@ fn main() -> std::process::ExitCode {
         Command::Devices(a) => cmd::devices::run(a),
         Command::Exam(a) => cmd::exam::run(a),
         Command::Report(a) => cmd::report::run(a),
+        Command::Records(c) => cmd::records::run(c),
     };
     match result {
         Ok(()) => std::process::ExitCode::SUCCESS,

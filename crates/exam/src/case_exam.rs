@@ -4,6 +4,12 @@
 //! to the [`ExamLog`] the moment it exists (an event when its press ends, a
 //! call when it is made, the score when the case is finished), so that a
 //! crash loses nothing already done.
+//!
+//! Every record is kept in memory first, whatever the log says: a log that
+//! fails (a database gone mid-exam) returns its error, but the event, call
+//! or score is already in [`CaseExam::events`], [`CaseExam::calls`],
+//! [`CaseExam::doppler_calls`] and [`CaseExam::score`], so the page and the
+//! score still have it.
 
 use crate::coverage::{event_state, Coverage};
 use crate::detector::{DetectorError, EventDetector, ExamSample};
@@ -65,6 +71,7 @@ pub struct CaseExam {
     doppler_calls: Vec<DopplerCall>,
     last_t: f64,
     peak_force: f64,
+    score: Option<CaseScore>,
 }
 
 impl CaseExam {
@@ -89,6 +96,7 @@ impl CaseExam {
             calls: Vec::new(),
             last_t: 0.0,
             peak_force: 0.0,
+            score: None,
         }
     }
 
@@ -118,9 +126,10 @@ impl CaseExam {
         self.peak_force = self.peak_force.max(e.peak_force);
         self.coverage.apply(&e);
         self.coverage.mark_done(&mut self.sites);
-        log.event(&e)?;
         self.events.push(e);
-        Ok(self.events.last().expect("just pushed"))
+        let kept = self.events.last().expect("just pushed");
+        log.event(kept)?;
+        Ok(kept)
     }
 
     /// The trainee calls `finding` at the protocol's site `site` at time `t`
@@ -155,9 +164,10 @@ impl CaseExam {
             truth: truth_for_call(&self.truth, &x.vein, x.s, Some(finding)),
             t,
         };
-        log.call(&call)?;
         self.calls.push(call);
-        Ok(self.calls.last().expect("just pushed"))
+        let kept = self.calls.last().expect("just pushed");
+        log.call(kept)?;
+        Ok(kept)
     }
 
     /// The trainee reads the spectral Doppler at the Doppler site `site`
@@ -191,18 +201,22 @@ impl CaseExam {
             truth: self.doppler_truth[i],
             t,
         };
-        log.doppler(&call)?;
         self.doppler_calls.push(call);
-        Ok(self.doppler_calls.last().expect("just pushed"))
+        let kept = self.doppler_calls.last().expect("just pushed");
+        log.doppler(kept)?;
+        Ok(kept)
     }
 
     /// Ends the case at `t` (s): a press still under way is closed and
     /// recorded, the case is scored, and the coverage and score are sent to
-    /// `log`.
+    /// `log`. The score is kept ([`Self::score`]) before it is sent; when
+    /// the log fails on the last press, the case is still scored and the
+    /// log still gets the score, and the first error is returned.
     pub fn finish(&mut self, t: f64, log: &mut dyn ExamLog) -> Result<CaseScore, CaseExamError> {
         let t = t.max(self.last_t);
+        let mut failed = None;
         if let Some(e) = self.detector.finish(t) {
-            self.keep_event(e, log)?;
+            failed = self.keep_event(e, log).err();
         }
         let mut score = score_case(&ScoreInput {
             case: &self.case,
@@ -218,8 +232,18 @@ impl CaseExam {
             &self.doppler_truth,
             &self.doppler_calls,
         );
-        log.finish(self.coverage.bins(), &score)?;
-        Ok(score)
+        self.score = Some(score.clone());
+        let sent = log.finish(self.coverage.bins(), &score);
+        match failed {
+            Some(e) => Err(e),
+            None => sent.map(|()| score).map_err(CaseExamError::from),
+        }
+    }
+
+    /// The case's score, once [`Self::finish`] has computed it (kept even
+    /// when the log failed to take it).
+    pub fn score(&self) -> Option<&CaseScore> {
+        self.score.as_ref()
     }
 
     /// The case's name.

@@ -236,3 +236,113 @@ fn doppler_calls_are_logged_and_scored_apart() {
     assert_eq!((score.calls_correct, score.calls_total), (0, 3));
     assert_eq!((score.doppler.correct, score.doppler.total), (1, 2));
 }
+
+/// A log whose sink dies after `ok` writes (a database gone mid-case:
+/// disk full, server stopped): every later write fails.
+struct DyingLog {
+    ok: usize,
+    writes: usize,
+    taken: MemoryLog,
+}
+
+impl DyingLog {
+    fn write(&mut self) -> Result<(), LogError> {
+        self.writes += 1;
+        if self.writes > self.ok {
+            return Err(LogError("database gone".into()));
+        }
+        Ok(())
+    }
+}
+
+impl ExamLog for DyingLog {
+    fn event(&mut self, e: &CompressionEvent) -> Result<(), LogError> {
+        self.write()?;
+        self.taken.event(e)
+    }
+    fn call(&mut self, c: &Call) -> Result<(), LogError> {
+        self.write()?;
+        self.taken.call(c)
+    }
+    fn doppler(&mut self, c: &DopplerCall) -> Result<(), LogError> {
+        self.write()?;
+        self.taken.doppler(c)
+    }
+    fn finish(&mut self, cov: &[crate::CoverageBin], s: &CaseScore) -> Result<(), LogError> {
+        self.write()?;
+        self.taken.finish(cov, s)
+    }
+}
+
+/// The same exam (four presses on the CFV and popliteal, two calls, a
+/// Doppler call, a press left under way at the end) run against a log that
+/// never fails and one that fails from its third write on: the case keeps
+/// every record in memory either way — its events, calls, Doppler calls
+/// and score equal the healthy log's exactly — and each failed write
+/// returns the log's error.
+#[test]
+fn a_failing_log_loses_no_record_in_memory() {
+    use crate::{DopplerFinding, FlowPattern};
+    let c = case("normal-average");
+    let run = |log: &mut dyn ExamLog| -> (CaseExam, usize) {
+        let mut x = CaseExam::new(&c, Protocol::TwoPoint);
+        let sites: Vec<_> = x.sites().to_vec();
+        let mut errors = 0;
+        let mut t = 0.0;
+        for k in 0..5 {
+            let site = &sites[k % 2];
+            let vein = if site.vein == "cfv" { "cfv" } else { "pv" };
+            // The last press is cut by the finish at half its length.
+            let n = if k == 4 { 50 } else { 100 };
+            for j in 0..=n {
+                let u = j as f64 / 100.0;
+                let f = 12.0 * (1.0 - (2.0 * u - 1.0).abs());
+                let sample = ExamSample {
+                    t: t + 2.0 * u,
+                    force: f,
+                    skin: [site.s, 0.0],
+                    vein: Some(vein),
+                    s: site.s,
+                    vein_ratio: 1.0 - f / 12.5,
+                    artery_ratio: 1.0,
+                };
+                match x.observe(&sample, log) {
+                    Ok(_) => {}
+                    Err(CaseExamError::Log(_)) => errors += 1,
+                    Err(e) => panic!("{e}"),
+                }
+            }
+            t += 3.0;
+            if k < 2 {
+                errors += x.call(&site.name, Finding::Normal, t, log).is_err() as usize;
+            }
+        }
+        let d = DopplerFinding {
+            flow: FlowPattern::Phasic,
+            augments: true,
+        };
+        errors += x.call_doppler("cfv", d, t, log).is_err() as usize;
+        errors += x.finish(t + 1.0, log).is_err() as usize;
+        (x, errors)
+    };
+    let mut healthy = MemoryLog::default();
+    let (good, none) = run(&mut healthy);
+    assert_eq!(none, 0);
+    let mut dying = DyingLog {
+        ok: 2,
+        writes: 0,
+        taken: MemoryLog::default(),
+    };
+    let (x, errors) = run(&mut dying);
+    // 5 events + 2 calls + 1 Doppler call + the score = 9 writes, 2 taken,
+    // 7 failed; the finish returns one error for its two failed writes (the
+    // press cut by the finish, then the score): 6 errors returned.
+    assert_eq!((healthy.events.len(), healthy.calls.len()), (5, 2));
+    assert_eq!((dying.writes, errors), (9, 6));
+    assert_eq!(dying.taken.events.len() + dying.taken.calls.len(), 2);
+    assert_eq!(x.events(), healthy.events.as_slice());
+    assert_eq!(x.calls(), healthy.calls.as_slice());
+    assert_eq!(x.doppler_calls(), healthy.doppler.as_slice());
+    assert_eq!(x.score(), healthy.score.as_ref());
+    assert_eq!(x.score(), good.score());
+}

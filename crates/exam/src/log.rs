@@ -20,6 +20,13 @@ pub trait ExamLog {
     fn doppler(&mut self, call: &DopplerCall) -> Result<(), LogError>;
     /// The case is over: its coverage strip and score.
     fn finish(&mut self, coverage: &[CoverageBin], score: &CaseScore) -> Result<(), LogError>;
+    /// When the records no longer go where they were meant to (the
+    /// database failed and a fallback keeps them elsewhere, or nowhere):
+    /// what happened and where the records are, in plain words for the
+    /// page. `None` while all is well (the default).
+    fn fault(&self) -> Option<String> {
+        None
+    }
 }
 
 /// An [`ExamLog`] that keeps everything in memory (tests, `--json` without

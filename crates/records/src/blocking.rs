@@ -26,6 +26,8 @@ struct Worker {
     jobs: Mutex<Option<mpsc::Sender<Job>>>,
     thread: Mutex<Option<JoinHandle<()>>>,
     db: String,
+    /// [`Store::fallback_dir`], or `None` when it has none.
+    fallback: Option<std::path::PathBuf>,
 }
 
 impl Drop for Worker {
@@ -56,7 +58,8 @@ impl BlockingStore {
     /// default SQLite file) on a new records thread.
     pub fn open(url: Option<&str>) -> Result<BlockingStore, RecordsError> {
         let url = url.map(str::to_string);
-        let (open_tx, open_rx) = mpsc::sync_channel::<Result<String, RecordsError>>(1);
+        type Opened = (String, Option<std::path::PathBuf>);
+        let (open_tx, open_rx) = mpsc::sync_channel::<Result<Opened, RecordsError>>(1);
         let (jobs_tx, jobs_rx) = mpsc::channel::<Job>();
         let thread = std::thread::Builder::new()
             .name("echothigh-records".into())
@@ -76,7 +79,7 @@ impl BlockingStore {
                 };
                 let store = match rt.block_on(Store::open(url.as_deref())) {
                     Ok(s) => {
-                        let _ = open_tx.send(Ok(s.name().to_string()));
+                        let _ = open_tx.send(Ok((s.name().to_string(), s.fallback_dir().ok())));
                         s
                     }
                     Err(e) => {
@@ -93,8 +96,8 @@ impl BlockingStore {
                 path: "the records thread".into(),
                 source,
             })?;
-        let db = match open_rx.recv() {
-            Ok(Ok(db)) => db,
+        let (db, fallback) = match open_rx.recv() {
+            Ok(Ok(x)) => x,
             Ok(Err(e)) => {
                 let _ = thread.join();
                 return Err(e);
@@ -109,6 +112,7 @@ impl BlockingStore {
                 jobs: Mutex::new(Some(jobs_tx)),
                 thread: Mutex::new(Some(thread)),
                 db,
+                fallback,
             }),
         })
     }
@@ -116,6 +120,11 @@ impl BlockingStore {
     /// The database as named in messages.
     pub fn name(&self) -> &str {
         &self.worker.db
+    }
+
+    /// [`Store::fallback_dir`]: where a fallback journal goes.
+    pub fn fallback_dir(&self) -> Result<std::path::PathBuf, RecordsError> {
+        self.worker.fallback.clone().ok_or(RecordsError::NoDataDir)
     }
 
     /// Runs `f` on the records thread and waits for its result.

@@ -91,6 +91,30 @@ pub enum RecordsError {
         /// The database's error.
         source: sqlx::Error,
     },
+    /// A fallback journal line could not be read or written.
+    #[error("fallback journal {path}, line {line}: {why}")]
+    Journal {
+        /// The journal file.
+        path: String,
+        /// The line (from 1; 0: the file as a whole).
+        line: usize,
+        /// What is wrong.
+        why: String,
+    },
+    /// A journal's record names a case whose `case` line is not in it.
+    #[error("fallback journal {path}, line {line}: a {kind} record of case `{case}` ({uid}) comes before the case's own line")]
+    Orphan {
+        /// The journal file.
+        path: String,
+        /// The line (from 1).
+        line: usize,
+        /// The record's kind.
+        kind: &'static str,
+        /// The case's name.
+        case: String,
+        /// The case's unique id.
+        uid: String,
+    },
     /// The store's worker thread is gone (it panicked or was shut down).
     #[error("{db}: the records thread has stopped")]
     WorkerGone {

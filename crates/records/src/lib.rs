@@ -15,6 +15,11 @@
 //!   `echothigh_exam::ExamLog` the exam writes to; each record is
 //!   committed before the call returns.
 //!
+//! When the database fails mid-exam, [`SessionRecorder`] (the live
+//! exam's recorder) turns to a fallback journal next to the database
+//! ([`journal`]); [`BlockingStore::import_journal`] replays it once the
+//! database works again, idempotently.
+//!
 //! The statistics (sensitivity and specificity for acute DVT, coverage,
 //! pressure adequacy, their trend over sessions) are pure functions in
 //! [`stats`], with the counting rules documented there.
@@ -24,6 +29,9 @@ mod blocking;
 pub mod breakdown;
 mod doppler;
 mod error;
+mod fallback;
+mod import;
+pub mod journal;
 mod read;
 pub mod schema;
 pub mod stats;
@@ -32,6 +40,9 @@ mod url;
 
 pub use blocking::{BlockingStore, CaseRecorder};
 pub use error::RecordsError;
+pub use fallback::{CaseWriter, SessionRecorder};
+pub use import::ImportReport;
+pub use journal::{CaseKey, SessionKey};
 pub use read::{
     CaseDetail, CaseSummary, ScoreNumbers, SessionRecord, SiteStats, TraineeHistory, TraineeSummary,
 };

@@ -7,6 +7,7 @@
 //! (both; SQLite ≥ 3.35). The only dialect branches are the migration
 //! files (identity columns) and the schema-version probe.
 
+use crate::journal::{CaseKey, SessionKey};
 use crate::url::{check_sqlite_file, Backend, DbUrl};
 use crate::{schema, RecordsError};
 use echothigh_exam::{Call, CaseScore, CompressionEvent, CoverageBin};
@@ -35,7 +36,7 @@ pub struct CaseId(pub i64);
 
 /// One piece of a case's ground truth (`kind`: `normal` or a thrombus
 /// kind), stored with the attempt so the report can overlay it.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub struct TruthSegment {
     /// The vein (`cfv`, `fv`, …).
     pub vein: String,
@@ -72,6 +73,8 @@ pub struct Store {
     pub(crate) pool: AnyPool,
     pub(crate) db: Arc<str>,
     backend: Backend,
+    /// The SQLite file (SQLite only).
+    path: Option<std::path::PathBuf>,
 }
 
 impl std::fmt::Debug for Store {
@@ -184,7 +187,23 @@ impl Store {
             pool,
             db,
             backend: u.backend,
+            path: u.path,
         })
+    }
+
+    /// Where a fallback journal goes when this database fails mid-exam
+    /// ([`crate::SessionRecorder`]): the SQLite file's directory, or for
+    /// PostgreSQL the directory of the default records file (the user's
+    /// data directory).
+    pub fn fallback_dir(&self) -> Result<std::path::PathBuf, RecordsError> {
+        let file = match &self.path {
+            Some(p) => p.clone(),
+            None => crate::default_path()?,
+        };
+        Ok(file
+            .parent()
+            .map(std::path::Path::to_path_buf)
+            .unwrap_or_else(|| std::path::PathBuf::from(".")))
     }
 
     /// The database as named in messages (path, or URL without password).
@@ -251,20 +270,31 @@ impl Store {
     }
 
     /// Starts a session of `trainee` under `protocol` (`two-point`, …) on
-    /// this host.
+    /// this host, now, with a new unique id.
     pub async fn begin_session(
         &self,
         trainee: &Trainee,
         protocol: &str,
     ) -> Result<SessionId, RecordsError> {
-        let host = gethostname::gethostname().to_string_lossy().into_owned();
+        let key = SessionKey::new(&trainee.name, protocol);
+        self.begin_session_keyed(trainee, &key).await
+    }
+
+    /// Starts the session `key` of `trainee` (its unique id, protocol, host
+    /// and start time as given: the live exam's, or a journal's on replay).
+    pub async fn begin_session_keyed(
+        &self,
+        trainee: &Trainee,
+        key: &SessionKey,
+    ) -> Result<SessionId, RecordsError> {
         let id: i64 = sqlx::query(
-            "INSERT INTO sessions (trainee_id, protocol, host, started_ms) VALUES ($1, $2, $3, $4) RETURNING id",
+            "INSERT INTO sessions (trainee_id, protocol, host, started_ms, uid) VALUES ($1, $2, $3, $4, $5) RETURNING id",
         )
         .bind(trainee.id)
-        .bind(protocol)
-        .bind(host)
-        .bind(now_ms())
+        .bind(&key.protocol)
+        .bind(&key.host)
+        .bind(key.started_ms)
+        .bind(&key.uid)
         .fetch_one(&self.pool)
         .await
         .and_then(|r| r.try_get(0))
@@ -272,10 +302,19 @@ impl Store {
         Ok(SessionId(id))
     }
 
-    /// Ends a session (its end time).
+    /// Ends a session (its end time: now).
     pub async fn end_session(&self, session: SessionId) -> Result<(), RecordsError> {
+        self.end_session_at(session, now_ms()).await
+    }
+
+    /// Ends a session at `ended_ms` (Unix ms).
+    pub async fn end_session_at(
+        &self,
+        session: SessionId,
+        ended_ms: i64,
+    ) -> Result<(), RecordsError> {
         sqlx::query("UPDATE sessions SET ended_ms = $1 WHERE id = $2")
-            .bind(now_ms())
+            .bind(ended_ms)
             .bind(session.0)
             .execute(&self.pool)
             .await
@@ -284,11 +323,23 @@ impl Store {
     }
 
     /// Starts an attempt at case `case` in `session`, with the case's
-    /// ground truth (one transaction).
+    /// ground truth (one transaction), now, with a new unique id.
     pub async fn begin_case(
         &self,
         session: SessionId,
         case: &str,
+        truth: &[TruthSegment],
+    ) -> Result<CaseId, RecordsError> {
+        self.begin_case_keyed(session, &CaseKey::new(case), truth)
+            .await
+    }
+
+    /// Starts the attempt `key` (its unique id, case name and start time as
+    /// given) in `session`, with the case's ground truth (one transaction).
+    pub async fn begin_case_keyed(
+        &self,
+        session: SessionId,
+        key: &CaseKey,
         truth: &[TruthSegment],
     ) -> Result<CaseId, RecordsError> {
         let mut tx = self
@@ -297,11 +348,12 @@ impl Store {
             .await
             .map_err(self.err("starting a case"))?;
         let id: i64 = sqlx::query(
-            "INSERT INTO case_attempts (session_id, case_name, started_ms) VALUES ($1, $2, $3) RETURNING id",
+            "INSERT INTO case_attempts (session_id, case_name, started_ms, uid) VALUES ($1, $2, $3, $4) RETURNING id",
         )
         .bind(session.0)
-        .bind(case)
-        .bind(now_ms())
+        .bind(&key.name)
+        .bind(key.started_ms)
+        .bind(&key.uid)
         .fetch_one(&mut *tx)
         .await
         .and_then(|r| r.try_get(0))
@@ -380,13 +432,25 @@ impl Store {
         .map_err(self.err("storing a call"))
     }
 
-    /// Stores the end of `case`: its coverage strip, its score, its sites
-    /// and its Doppler score, in one transaction (all or nothing).
+    /// Stores the end of `case` now: its coverage strip, its score, its
+    /// sites and its Doppler score, in one transaction (all or nothing).
     pub async fn finish_case(
         &self,
         case: CaseId,
         coverage: &[CoverageBin],
         score: &CaseScore,
+    ) -> Result<(), RecordsError> {
+        self.finish_case_at(case, coverage, score, now_ms()).await
+    }
+
+    /// [`Self::finish_case`] at `finished_ms` (Unix ms: the live exam's
+    /// time, kept by a journal for its replay).
+    pub async fn finish_case_at(
+        &self,
+        case: CaseId,
+        coverage: &[CoverageBin],
+        score: &CaseScore,
+        finished_ms: i64,
     ) -> Result<(), RecordsError> {
         let doing = "storing a case's score";
         let mut tx = self.pool.begin().await.map_err(self.err(doing))?;
@@ -428,7 +492,7 @@ impl Store {
              peak_force = $9, mean_force = $10, missed = $11, doppler_correct = $12, doppler_total = $13 \
              WHERE id = $14",
         )
-        .bind(now_ms())
+        .bind(finished_ms)
         .bind(&score.protocol)
         .bind(score.coverage)
         .bind(i64::from(score.calls_correct))

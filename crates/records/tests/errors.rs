@@ -104,13 +104,14 @@ fn a_newer_schema_is_refused_on_every_backend() {
         } else {
             echothigh_records::Backend::Postgres
         });
-        assert_eq!(known, 2);
+        // 0001 records, 0002 Doppler, 0003 unique ids (the fallback journal's replay).
+        assert_eq!(known, 3);
         assert!(
             matches!(
                 e,
                 RecordsError::NewerSchema {
                     found: 999,
-                    known: 2,
+                    known: 3,
                     ..
                 }
             ),
@@ -118,7 +119,7 @@ fn a_newer_schema_is_refused_on_every_backend() {
         );
         assert!(
             e.to_string()
-                .contains("schema version 999 is newer than this echothigh (knows 2)"),
+                .contains("schema version 999 is newer than this echothigh (knows 3)"),
             "{e}"
         );
     }

@@ -17,6 +17,7 @@ pub mod image_site;
 pub mod live_device;
 pub mod net;
 pub mod psf;
+pub mod records;
 pub mod report;
 pub mod run;
 #[cfg(feature = "viewer")]

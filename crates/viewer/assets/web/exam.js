@@ -43,7 +43,9 @@ export function showExam(e, levelS, send) {
   $('exam-status').textContent = e.open ?
     `${e.presses} compressions · peak ${e.peak_force.toFixed(1)} N` :
     (e.cases_done ? `session: ${e.cases_done} cases, calls right ${e.calls_correct} / ${e.calls_total}` : '');
-  if (e.error) $('exam-status').textContent += ` · ${e.error}`;
+  // A records fault (the database failed: where the records are kept) is
+  // already the meta's `recording`; other errors go here.
+  if (e.error && e.error !== e.recording) $('exam-status').textContent += ` · ${e.error}`;
   showResult(e);
   drawStrip($('coverage'), e.open ? e.coverage : (e.last ? e.last.coverage : []),
     e.open ? e.sites : [], e.open ? null : (e.last ? e.last.truth : null), levelS);

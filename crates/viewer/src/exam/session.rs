@@ -142,20 +142,23 @@ impl ExamSession {
             return Ok(());
         };
         let was = o.exam.pressing();
-        let ended = o.exam.observe(sample, o.log.as_mut())?.is_some();
+        // A failed record (the log's error) still ended a press: the
+        // press is kept in memory and the page hears of it.
+        let seen = o.exam.observe(sample, o.log.as_mut()).map(|e| e.is_some());
+        let ended = matches!(seen, Ok(true) | Err(CaseExamError::Log(_)));
         if ended || was != o.exam.pressing() {
             self.refresh();
         }
-        Ok(())
+        seen.map(drop).map_err(ExamError::from)
     }
 
     /// The trainee calls `finding` at `site` of the open case.
     pub fn call(&mut self, site: &str, finding: Finding) -> Result<(), ExamError> {
         let o = self.open.as_mut().ok_or(ExamError::NoCase)?;
         let t = o.started.elapsed().as_secs_f64();
-        o.exam.call(site, finding, t, o.log.as_mut())?;
+        let made = o.exam.call(site, finding, t, o.log.as_mut()).map(drop);
         self.refresh();
-        Ok(())
+        Ok(made?)
     }
 
     /// The trainee calls the spectral Doppler at the Doppler site `site`
@@ -163,22 +166,35 @@ impl ExamSession {
     pub fn call_doppler(&mut self, site: &str, finding: DopplerFinding) -> Result<(), ExamError> {
         let o = self.open.as_mut().ok_or(ExamError::NoCase)?;
         let t = o.started.elapsed().as_secs_f64();
-        o.exam.call_doppler(site, finding, t, o.log.as_mut())?;
+        let made = o
+            .exam
+            .call_doppler(site, finding, t, o.log.as_mut())
+            .map(drop);
         self.refresh();
-        Ok(())
+        Ok(made?)
     }
 
     /// Finishes the open case: scores it and reveals its truth.
     pub fn finish(&mut self) -> Result<(), ExamError> {
         let mut o = self.open.take().ok_or(ExamError::NoCase)?;
         let t = o.started.elapsed().as_secs_f64();
+        let mut log_error = None;
         let score = match o.exam.finish(t, o.log.as_mut()) {
             Ok(s) => s,
-            Err(e) => {
-                // Keep the case open: the trainee may retry the finish.
-                self.open = Some(o);
-                return Err(e.into());
-            }
+            Err(e) => match (e, o.exam.score().cloned()) {
+                // The records could not be kept where they go (the log's
+                // fault says where they are): the score is in memory, the
+                // case ends.
+                (CaseExamError::Log(e), Some(s)) => {
+                    log_error = Some(format!("recording the exam: {e}"));
+                    s
+                }
+                (e, _) => {
+                    // Keep the case open: the trainee may retry the finish.
+                    self.open = Some(o);
+                    return Err(e.into());
+                }
+            },
         };
         let case = &self.plan.cases[o.index];
         self.status.cases_done += 1;
@@ -205,6 +221,9 @@ impl ExamSession {
                 .collect(),
             coverage: o.exam.coverage().bins().to_vec(),
         });
+        if let Some(e) = log_error {
+            self.status.error = Some(e);
+        }
         self.refresh();
         Ok(())
     }
@@ -233,9 +252,22 @@ impl ExamSession {
     }
 
     /// Rebuilds the page's view of the open case and bumps the revision.
+    /// A records fault (the database failed: where the records are kept
+    /// now) replaces `recording` and stands in `error` until a later error.
     fn refresh(&mut self) {
+        let fault = self
+            .open
+            .as_ref()
+            .and_then(|o| o.log.fault())
+            .or_else(|| self.sink.fault());
         let st = &mut self.status;
         st.rev += 1;
+        if let Some(f) = fault {
+            if st.recording != f {
+                st.recording = f.clone();
+                st.error = Some(f);
+            }
+        }
         st.open = self.open.is_some();
         match &self.open {
             Some(o) => {

@@ -147,3 +147,84 @@ fn leaving_drops_the_open_case_unscored() {
         Err(ExamError::NoCase)
     ));
 }
+
+/// One press at the checklist site `k` of the open case (the vein closes
+/// at 9 N, as in the first test).
+fn press_at(x: &mut ExamSession, k: usize, t0: f64) {
+    let site = x.status().sites[k].clone();
+    let vein = if site.vein == "cfv" { "cfv" } else { "pv" };
+    for (j, f) in [0.0, 4.0, 9.0, 4.0, 0.2].into_iter().enumerate() {
+        x.observe(&sample(
+            t0 + 0.1 * j as f64,
+            f,
+            vein,
+            site.s,
+            1.0 - f / 10.0,
+        ))
+        .unwrap();
+    }
+}
+
+/// The database under a live exam fails mid-case. The fault is real: a
+/// directory is put where SQLite creates its rollback journal
+/// (`records.sqlite3-journal`), so every write fails to open it, as on a
+/// directory turned read-only (the tests run as root, where `chmod` does
+/// not stop writes; a directory in the way stops root too). The exam goes
+/// on without an error to the trainee's commands; the press and call after
+/// the fault are counted; the page's `recording` and `error` say the
+/// database failed and name the journal; the journal next to the database
+/// holds the whole case (case, both presses, the call, the score).
+#[test]
+fn a_database_failing_mid_case_is_named_on_the_page_and_nothing_is_lost() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("records.sqlite3");
+    let store =
+        echothigh_records::BlockingStore::open(Some(&format!("sqlite://{}", file.display())))
+            .unwrap();
+    let sink = crate::exam::sink::DbSink::new(store, "ada").unwrap();
+    let mut x = ExamSession::new(plan(&["normal-average"]), Box::new(sink), false);
+    x.start().unwrap();
+    x.trainee_pressed();
+    press_at(&mut x, 0, 1.0);
+    assert_eq!(x.status().presses, 1);
+    assert!(
+        x.status().recording.starts_with("recorded in "),
+        "{}",
+        x.status().recording
+    );
+    assert_eq!(x.status().error, None);
+
+    std::fs::create_dir(dir.path().join("records.sqlite3-journal")).unwrap();
+    press_at(&mut x, 1, 3.0);
+    x.call("cfv", Finding::Normal).unwrap();
+    let st = x.status().clone();
+    assert_eq!((st.presses, st.sites[0].call), (2, Some(Finding::Normal)));
+    let journals: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| {
+            p.file_name()
+                .unwrap()
+                .to_string_lossy()
+                .starts_with("records-fallback-ada-")
+        })
+        .collect();
+    assert_eq!(journals.len(), 1, "one journal next to the database");
+    let path = journals[0].display().to_string();
+    assert!(
+        st.recording.contains("the records database failed"),
+        "{}",
+        st.recording
+    );
+    assert!(st.recording.contains(&path), "{}", st.recording);
+    assert_eq!(st.error.as_deref(), Some(st.recording.as_str()));
+
+    x.finish().unwrap();
+    assert_eq!(
+        x.status().last.as_ref().map(|l| l.score.calls_total),
+        Some(2)
+    );
+    let j = echothigh_records::journal::read(&journals[0]).unwrap();
+    let kinds: Vec<&str> = j.lines.iter().map(|(_, l)| l.record.kind()).collect();
+    assert_eq!(kinds, ["case", "event", "event", "call", "finish"]);
+}

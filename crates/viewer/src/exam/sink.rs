@@ -21,6 +21,11 @@ pub trait RecordSink: Send {
     fn store(&self) -> Option<echothigh_records::BlockingStore> {
         None
     }
+    /// When the records no longer go where [`Self::describe`] said (the
+    /// database failed): what happened and where they are, in plain words.
+    fn fault(&self) -> Option<String> {
+        None
+    }
     /// The session is over (a case left open stays unfinished).
     fn end(&mut self) -> Result<(), LogError> {
         Ok(())
@@ -83,11 +88,11 @@ impl RecordSink for MemorySink {
 /// Records into the trainee's database (`echothigh-records`): the session
 /// row opens with the first case, each case gets its attempt row with its
 /// ground truth, and every event, call and score is committed before the
-/// exam goes on.
+/// exam goes on. When the database fails mid-exam, the records go on into
+/// a fallback journal next to it ([`echothigh_records::SessionRecorder`]),
+/// and each case log's [`ExamLog::fault`] says so and where.
 pub struct DbSink {
-    store: echothigh_records::BlockingStore,
-    trainee: echothigh_records::Trainee,
-    session: Option<echothigh_records::SessionId>,
+    recorder: echothigh_records::SessionRecorder,
 }
 
 impl DbSink {
@@ -96,51 +101,43 @@ impl DbSink {
         store: echothigh_records::BlockingStore,
         trainee: &str,
     ) -> Result<DbSink, echothigh_records::RecordsError> {
-        let trainee = store.trainee(trainee)?;
         Ok(DbSink {
-            store,
-            trainee,
-            session: None,
+            recorder: echothigh_records::SessionRecorder::new(store, trainee)?,
         })
+    }
+
+    /// The session's recorder (its fault and journal).
+    pub fn recorder(&self) -> &echothigh_records::SessionRecorder {
+        &self.recorder
     }
 }
 
 impl RecordSink for DbSink {
     fn begin_case(&mut self, case: &Case, protocol: Protocol) -> Result<CaseLog, LogError> {
-        let err = |e: echothigh_records::RecordsError| LogError(e.to_string());
-        let session = match self.session {
-            Some(s) => s,
-            None => {
-                let s = self
-                    .store
-                    .begin_session(&self.trainee, protocol.name())
-                    .map_err(err)?;
-                self.session = Some(s);
-                s
-            }
-        };
         let truth = echothigh_records::TruthSegment::of_case(case);
-        let recorder = self
-            .store
-            .begin_case(session, &case.file.name, &truth)
-            .map_err(err)?;
-        Ok(Box::new(recorder))
+        Ok(Box::new(self.recorder.begin_case(
+            protocol.name(),
+            &case.file.name,
+            &truth,
+        )))
     }
 
     fn describe(&self) -> String {
-        format!("recorded in {}", self.store.name())
+        match self.recorder.fault() {
+            Some(f) => f,
+            None => format!("recorded in {}", self.recorder.store().name()),
+        }
     }
 
     fn store(&self) -> Option<echothigh_records::BlockingStore> {
-        Some(self.store.clone())
+        Some(self.recorder.store())
+    }
+
+    fn fault(&self) -> Option<String> {
+        self.recorder.fault()
     }
 
     fn end(&mut self) -> Result<(), LogError> {
-        if let Some(s) = self.session.take() {
-            self.store
-                .end_session(s)
-                .map_err(|e| LogError(e.to_string()))?;
-        }
-        Ok(())
+        self.recorder.end()
     }
 }
