@@ -27,12 +27,13 @@ use echothigh_imaging::{AnatomyConfig, VeinState};
 pub const DEEPEST_WALL_FRACTION: f64 = 0.75;
 /// The scanner's depth step (m): whole centimetres.
 pub const DEPTH_STEP: f64 = 0.01;
-/// The shallowest depth the rule sets (m): a linear probe's thigh preset
-/// never shows less than 4 cm (the femur lies below the vessels).
+/// The shallowest depth the rule sets (m). Our choice, not sourced: the
+/// rule alone would give 3 cm at a lean groin (far wall 22 mm), which cuts
+/// off the femur under the vessels, the landmark a trainee orients by.
 pub const MIN_DEPTH: f64 = 0.04;
-/// The deepest (m): the 7.5 MHz probe's useful penetration in the thigh
-/// (`ImagingConfig::depth` accepts up to 0.2 m; a thigh is imaged to
-/// 4–10 cm).
+/// The deepest (m): the upper end of the 4–10 cm over which a thigh is
+/// imaged (`ImagingConfig::depth`'s documented range; not a measured
+/// penetration of the 7.5 MHz probe). The obese popliteal fossa reaches it.
 pub const MAX_DEPTH: f64 = 0.10;
 /// Spacing of the levels sampled along the leg (m): finer than any vessel's
 /// change of depth that matters at a 1 cm depth step.
