@@ -111,6 +111,22 @@ pub struct Patient {
     /// A tense (contracted) leg: muscle stiffness × 2 ("active muscle ≈ 2×
     /// inactive", reference row 19). For the physical model.
     pub tense_muscle: bool,
+    /// Tissue force (N) the exam on this leg asks of the probe: the force at
+    /// which the artery is clearly oval (120 mmHg of tissue pressure at its
+    /// centre, reference §4 item 5) at the leg's hardest level from the groin
+    /// to the knee, rounded up to a whole newton. The scenario lowers its
+    /// force scale, when it must, so that the device renders this force
+    /// unsaturated (issue 12: "the force scale and device limits must still
+    /// let a trainee close a healthy vein there"). Lean male 35 (34.8 N over
+    /// the popliteal vein 310 mm below the groin), average female 35 (34.5 N,
+    /// popliteal, 270 mm), obese 49 (48.6 N, popliteal, 310 mm) (derived:
+    /// measured on the physical model by
+    /// `runtime/tests/coaptation_along_leg.rs`, which checks each preset's
+    /// value against its own presses). The force depends on the vessels'
+    /// depth (the fat and muscle over them), not on the tissue's stiffness:
+    /// the vein and the artery respond to the pressure a force puts at their
+    /// depth. Range [5, 80] N (80 N: twice the clinical maximum of ~40 N).
+    pub exam_force: f64,
     /// Variant: a duplicated femoral vein `fv2` along the mid-thigh
     /// (19.7% pooled prevalence, reference row 26).
     pub duplicated_fv: bool,
@@ -158,7 +174,7 @@ impl Patient {
     /// Checks every value against its documented range; the error names the key.
     pub fn validate(&self) -> Result<(), AnatomyError> {
         let mm = 1e-3;
-        let checks: [(&'static str, f64, f64, f64, &'static str); 20] = [
+        let checks: [(&'static str, f64, f64, f64, &'static str); 21] = [
             (
                 "knee_s",
                 self.knee_s,
@@ -291,6 +307,13 @@ impl Patient {
                 1e-3,
                 20.0,
                 "must lie in (0, 20]",
+            ),
+            (
+                "exam_force",
+                self.exam_force,
+                5.0,
+                80.0,
+                "must lie in [5, 80] N",
             ),
             (
                 "fv_diameter_mid",

@@ -89,8 +89,17 @@ pub struct DeviceConfig {
     pub substep_rate: f64,
     /// Device force / tissue force (dimensionless), in [0.01, 10], see
     /// [`ForceScale`] (scales the clinical 5–40 N to a device's few N, or
-    /// up). Default 0.3.
+    /// up). Default 0.3. On a patient's leg the scenario lowers it where it
+    /// must (see `scale_to_patient`).
     pub force_scale: f64,
+    /// Whether, on a patient's leg, `force_scale` is lowered where it must
+    /// be so that `max_force / force_scale` covers the patient's exam force
+    /// (the force at which the artery is clearly oval at the leg's hardest
+    /// level, `echothigh_anatomy::Patient::exam_force`; the scenario applies
+    /// it, `echothigh_runtime::scenario::Scenario::device`). Default true;
+    /// false keeps the configured scale whatever the leg (the paper's Fig. 4
+    /// experiment, `scenarios/fig4.toml`, whose device is the paper's).
+    pub scale_to_patient: bool,
 }
 
 impl Default for DeviceConfig {
@@ -104,6 +113,7 @@ impl Default for DeviceConfig {
             sampling_rate: 1000.0,
             substep_rate: 10_000.0,
             force_scale: ForceScale::DEFAULT,
+            scale_to_patient: true,
         }
     }
 }

@@ -77,7 +77,7 @@ pub fn bound(scenario: &Scenario, direct: &ModeTrace) -> StabilityBound {
             .map(|i| direct.step_stiffness[i])
             .collect(),
     );
-    let s = scenario.device.force_scale;
+    let s = scenario.device().force_scale;
     let big_k = s * k;
     let t = 1.0 / scenario.coupling.physics_rate;
     let tau = scenario.coupling.compute_delay * t + 2.0 * scenario.link.latency;

@@ -62,7 +62,7 @@ pub struct RunOutput {
 pub fn scripted_device(scenario: &Scenario) -> Result<SimulatedDevice> {
     let script = ExamScript::new(scenario.exam_script_config()?).map_err(anyhow::Error::msg)?;
     let hand = SimulatedHand::scripted(scenario.hand, script).map_err(anyhow::Error::msg)?;
-    SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)
+    SimulatedDevice::with_hand(scenario.device(), hand).map_err(anyhow::Error::msg)
 }
 
 /// Runs the scenario on the deterministic virtual clock, as fast as it
@@ -173,7 +173,7 @@ pub fn run_threads_on<D: TickDevice + Send + 'static>(
 ) -> Result<RunOutput> {
     let c = &scenario.coupling;
     let (sink, source) = haptic_side_for(c.mode, scenario)?;
-    let scale = scenario.device.force_scale();
+    let scale = scenario.device().force_scale();
     let config = ClientConfig {
         loop_config: &scenario.haptics.runner,
         duration: scenario.run.duration,

@@ -60,8 +60,9 @@ pub struct PressConfig {
     /// Default 10 (the default scenario's exam force).
     pub target_force: f64,
     /// The cap (N) of an `adequate` press, in [1.5, 40]. Default 20: the
-    /// renderable tissue force of the simulated device (fidelity review
-    /// §4 item 9).
+    /// tissue force the default device renders at its configured scale
+    /// (6 N / 0.3; fidelity review §4 item 9), which closes a healthy vein
+    /// at every level of the lean and average legs (`tests/coaptation_along_leg.rs`).
     pub max_force: f64,
     /// The hand's setpoint speed into the skin (m/s), in [0.005, 0.2].
     /// Default 0.05.

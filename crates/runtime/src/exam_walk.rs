@@ -95,7 +95,7 @@ impl<'a> Walker<'a> {
         let start = leg.to_model(&Vec3::new(0.0, 0.2, -scenario.thigh.centre_s));
         let hand = SimulatedHand::new(scenario.hand, start).map_err(anyhow::Error::msg)?;
         let device =
-            SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)?;
+            SimulatedDevice::with_hand(scenario.device(), hand).map_err(anyhow::Error::msg)?;
         let run = VirtualRun::with_device(scenario, device)?;
         let period = scenario.coupling.haptic_period();
         let (c, l) = (scenario.thigh.centre_s, scenario.thigh.length);

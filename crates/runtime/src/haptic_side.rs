@@ -123,7 +123,7 @@ pub fn haptic_side_for(
     haptic_side(
         mode,
         &scenario.haptics,
-        scenario.device.tissue_max_stiffness(),
+        scenario.device().tissue_max_stiffness(),
     )
     .map_err(anyhow::Error::msg)
 }

@@ -63,7 +63,7 @@ impl VirtualRun {
         let script = ExamScript::new(scenario.exam_script_config()?).map_err(anyhow::Error::msg)?;
         let hand = SimulatedHand::scripted(scenario.hand, script).map_err(anyhow::Error::msg)?;
         let device =
-            SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)?;
+            SimulatedDevice::with_hand(scenario.device(), hand).map_err(anyhow::Error::msg)?;
         Self::with_device(scenario, device)
     }
 
@@ -85,7 +85,7 @@ impl VirtualRun {
         let mut tick = HapticTick::new(
             device,
             source,
-            scenario.device.force_scale(),
+            scenario.device().force_scale(),
             tick_physics,
             c.haptic_period(),
         );

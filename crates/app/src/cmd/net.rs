@@ -300,7 +300,7 @@ pub fn client(args: ClientArgs) -> Result<()> {
         welcome.physics_rate
     );
     let (sink, source) = haptic_side_for(c.mode, &scenario)?;
-    let scale = scenario.device.force_scale();
+    let scale = scenario.device().force_scale();
     let config = ClientConfig {
         loop_config: &scenario.haptics.runner,
         duration: scenario.run.duration,

@@ -104,7 +104,7 @@ impl Settings {
             physics_rate: s.coupling.physics_rate,
             latency: s.link.latency,
             exam: inner.exam,
-            max_force: s.device.max_force / s.device.force_scale,
+            max_force: s.device.max_force / s.device().force_scale,
             limits: limits_of(s),
         }
     }

@@ -139,7 +139,7 @@ pub(super) fn start_session(
     let device = if exam {
         let script = ExamScript::new(scenario.exam_script_config()?).map_err(anyhow::Error::msg)?;
         let hand = SimulatedHand::scripted(scenario.hand, script).map_err(anyhow::Error::msg)?;
-        SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)?
+        SimulatedDevice::with_hand(scenario.device(), hand).map_err(anyhow::Error::msg)?
     } else {
         let at_target = DeviceState {
             position: Vec3::from(target.position),
@@ -149,7 +149,7 @@ pub(super) fn start_session(
         let state = carried.device.unwrap_or(at_target);
         let hand = SimulatedHand::new(scenario.hand, state.setpoint).map_err(anyhow::Error::msg)?;
         let mut d =
-            SimulatedDevice::with_hand(scenario.device, hand).map_err(anyhow::Error::msg)?;
+            SimulatedDevice::with_hand(scenario.device(), hand).map_err(anyhow::Error::msg)?;
         d.set_state(state.position, state.velocity);
         d
     };
@@ -224,7 +224,7 @@ pub(super) fn start_session(
     let (st, sh, scale, loop_cfg) = (
         stop.clone(),
         shared.clone(),
-        scenario.device.force_scale(),
+        scenario.device().force_scale(),
         scenario.haptics.runner.clone(),
     );
     let mut runner = LoopRunner::new(&loop_cfg).map_err(anyhow::Error::msg)?;
