@@ -322,6 +322,22 @@ try {
   }, before.physics, 'the force to rise under the probe');
   check('dragging the probe raises the force', true,
     `|F| ${before.physics.toFixed(2)} → ${pressed.physics.toFixed(2)} N (rendered ${pressed.rendered.toFixed(2)} N) at depth ${(pressed.depth * 1000).toFixed(1)} mm`);
+  // The gauge (issue 19): a scale in N, the device's limit on this leg
+  // labelled with the state's max_force, the felt and the tissue force both
+  // named.
+  const gaugeInfo = await page.evaluate(() => ({
+    ticks: [...document.querySelectorAll('#gauge .gauge-tick')].map((t) => Number(t.textContent)),
+    limit: document.getElementById('gauge-limit-label').textContent,
+    felt: document.getElementById('gauge-value').textContent,
+    tissue: document.getElementById('gauge-tissue-value').textContent,
+    max: window.echothigh.state.max_force,
+  }));
+  check('the gauge has a scale, a labelled limit and names the felt and the tissue force',
+    gaugeInfo.ticks.length >= 3 && gaugeInfo.ticks.every((t, i) => i === 0 || t > gaugeInfo.ticks[i - 1]) &&
+      gaugeInfo.limit === `${gaugeInfo.max.toFixed(0)} N` && /^\d+\.\d N$/.test(gaugeInfo.felt) &&
+      /^tissue \d+\.\d N$/.test(gaugeInfo.tissue),
+    `ticks ${gaugeInfo.ticks.join(' ')} N, limit ${gaugeInfo.limit} (state ${gaugeInfo.max.toFixed(1)} N), ` +
+      `felt ${gaugeInfo.felt}, ${gaugeInfo.tissue}`);
   // The guided start (issue 19) opened on this first visit (a fresh browser
   // profile) and ticked off "place the probe on the skin" from the state.
   const guideStep = await page.evaluate(() => {

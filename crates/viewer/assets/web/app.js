@@ -51,7 +51,7 @@ try {
 live.scene = scene; // for the browser test and the console
 const echo = new EchoView($('echo'));
 const plot = new ForcePlot($('plot'), 5);
-const gauge = new Gauge($('gauge-fill'), $('gauge-limit'), $('gauge-value'));
+const gauge = new Gauge($('gauge-box'));
 // The technical status and settings, hidden until asked for (remembered).
 function showTech(on) {
   document.body.classList.toggle('tech-on', on);
@@ -208,7 +208,7 @@ function onState(s) {
   notify('state', s);
   const rendered = norm(s.rendered_force), physics = norm(s.physics_force);
   plot.push(s.time, rendered, physics);
-  gauge.update(rendered, s.max_force);
+  gauge.update(rendered, physics, s.max_force);
   if (scene) scene.updateState(s);
   showStatus(s, renderedFps);
   syncControls(s);

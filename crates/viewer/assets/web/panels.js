@@ -69,19 +69,64 @@ export function drawDepthScale(ctx, w, h, depth) {
 }
 
 /** The force the trainee would feel, against the device limit. */
+/**
+ * The force gauge (issue 19): the felt force as the bar, the tissue force as
+ * a white mark, a scale in N with a labelled tick every 2, 5, 10 or 20 N (at
+ * most six), and the device's limit on this leg as a dashed line labelled
+ * with its value (the most tissue force the device renders unsaturated: its
+ * peak over the force scale, which the scenario fits to the patient).
+ */
 export class Gauge {
-  constructor(fill, limit, value) {
-    this.fill = fill; this.limit = limit; this.value = value;
+  constructor(box) {
+    const q = (sel) => box.querySelector(sel);
+    this.bar = q('#gauge');
+    this.fill = q('#gauge-fill');
+    this.tissue = q('#gauge-tissue');
+    this.limit = q('#gauge-limit');
+    this.limitLabel = q('#gauge-limit-label');
+    this.value = q('#gauge-value');
+    this.tissueValue = q('#gauge-tissue-value');
+    this.scaleOf = null; // the maxForce the ticks were drawn for
   }
 
-  /** `force` (N, rendered), `maxForce` (N, device limit in tissue units). */
-  update(force, maxForce) {
-    const scale = Math.max(maxForce * 1.25, 1);
-    const frac = Math.min(force / scale, 1);
-    this.fill.style.height = `${(frac * 100).toFixed(1)}%`;
-    this.fill.style.background = force > maxForce ? '#c0262b' : force > 0.7 * maxForce ? '#e8a33a' : '#3fd07a';
-    this.limit.style.top = `${(100 - (maxForce / scale) * 100).toFixed(1)}%`;
-    this.value.textContent = `${force.toFixed(1)} N`;
+  /** The tick step (N): the smallest of 2, 5, 10, 20 giving at most six ticks up to `top` N. */
+  static step(top) {
+    return [2, 5, 10, 20].find((d) => top / d <= 6) || 50;
+  }
+
+  /** Redraws the ticks for a bar spanning 0 to `top` N. */
+  ticks(top) {
+    for (const t of this.bar.querySelectorAll('.gauge-tick')) t.remove();
+    const d = Gauge.step(top);
+    for (let f = d; f < top; f += d) {
+      // No tick label where the limit's label stands (within 10 % of the bar).
+      if (Math.abs(f - this.scaleOf) < 0.1 * top) continue;
+      const t = document.createElement('div');
+      t.className = 'gauge-tick';
+      t.style.bottom = `${((f / top) * 100).toFixed(1)}%`;
+      t.textContent = `${f}`;
+      this.bar.appendChild(t);
+    }
+  }
+
+  /** `felt` and `tissue` forces (N, tissue units); `maxForce` (N): the device's limit in tissue units. */
+  update(felt, tissue, maxForce) {
+    const top = Math.max(maxForce * 1.25, 1);
+    if (this.scaleOf !== maxForce) {
+      this.scaleOf = maxForce;
+      this.ticks(top);
+      this.limit.style.bottom = `${((maxForce / top) * 100).toFixed(1)}%`;
+      this.limitLabel.textContent = `${maxForce.toFixed(0)} N`;
+      this.limit.title = `device limit: ${maxForce.toFixed(1)} N of tissue force on this leg`;
+      this.bar.setAttribute('aria-valuemax', maxForce.toFixed(1));
+    }
+    const pct = (f) => `${(Math.min(f / top, 1) * 100).toFixed(1)}%`;
+    this.fill.style.height = pct(felt);
+    this.fill.style.background = felt > maxForce ? '#c0262b' : felt > 0.7 * maxForce ? '#e8a33a' : '#3fd07a';
+    this.tissue.style.bottom = pct(tissue);
+    this.value.textContent = `${felt.toFixed(1)} N`;
+    this.tissueValue.textContent = `tissue ${tissue.toFixed(1)} N`;
+    this.bar.setAttribute('aria-valuenow', felt.toFixed(1));
   }
 }
 
