@@ -179,10 +179,13 @@ impl ColorFlow {
                 let p = i * self.columns + j;
                 let g = bmode[p];
                 self.velocity[p] = f32::NAN;
+                // Outside the box, or where the grey wins (priority): no
+                // colour, whatever the ensemble would give.
                 if lat < c.box_left
                     || lat > c.box_right
                     || depth < c.box_top
                     || depth > c.box_bottom
+                    || g > c.priority
                 {
                     out(p, g, None);
                     continue;
@@ -219,7 +222,7 @@ impl ColorFlow {
                 }
                 let power = r0 / m as f32;
                 let v = r1.arg() / std::f32::consts::PI * v_nyq;
-                if power < power_min || g > c.priority || v.abs() < c.min_velocity as f32 * v_nyq {
+                if power < power_min || v.abs() < c.min_velocity as f32 * v_nyq {
                     out(p, g, None);
                     continue;
                 }
