@@ -1,6 +1,6 @@
 //! `echothigh bench image --doppler`: colour flow frames per second at the
 //! live size (256 × 384) on one core — the B-mode frame, the flow scene
-//! and the colour overlay each timed, and together — on the section of a
+//! and the colour overlay each timed (`color` is scene plus overlay), and together — on the section of a
 //! normal lean leg at `fv-proximal` (four vessels) with the probe tilted
 //! 20°, and PW spectral lines per second (default `[doppler.pw]`: 512
 //! scatterers, 4 kHz PRF, 128-point FFT, 20 pulses per line) with the
@@ -51,7 +51,8 @@ fn color(frames: usize) -> Result<serde_json::Value> {
     let mut rgb = vec![0u8; 3 * gray.len()];
     let mut scene = FlowScene::new();
     let m = Maneuvers::new();
-    let (mut tb, mut tc, mut tt) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut tb, mut ts, mut to) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut tc, mut tt) = (Vec::new(), Vec::new());
     for k in 0..frames + 5 {
         let input = FrameInput {
             deformation: &press,
@@ -63,15 +64,19 @@ fn color(frames: usize) -> Result<serde_json::Value> {
         r.render_into(&input, &mut gray)?;
         let c1 = thread_cpu_us();
         flows.fill(&fc, &m, &r, &input, 0.0, 0.0, &mut scene)?;
-        cf.frame(&gray, &scene, &mut rgb)?;
         let c2 = thread_cpu_us();
+        cf.frame(&gray, &scene, &mut rgb)?;
+        let c3 = thread_cpu_us();
         if k >= 5 {
             tb.push((c1 - c0) * 1e-6);
-            tc.push((c2 - c1) * 1e-6);
-            tt.push((c2 - c0) * 1e-6);
+            ts.push((c2 - c1) * 1e-6);
+            to.push((c3 - c2) * 1e-6);
+            tc.push((c3 - c1) * 1e-6);
+            tt.push((c3 - c0) * 1e-6);
         }
     }
     let (b, c, t) = (median(tb), median(tc), median(tt));
+    let (sc, ov) = (median(ts), median(to));
     Ok(serde_json::json!({
         "columns": cfg.columns,
         "rows": cfg.rows,
@@ -79,6 +84,8 @@ fn color(frames: usize) -> Result<serde_json::Value> {
         "frames": frames,
         "colored_pixels_last_frame": cf.colored(),
         "bmode_median_s": b,
+        "scene_median_s": sc,
+        "overlay_median_s": ov,
         "color_median_s": c,
         "bmode_plus_color_median_s": t,
         "color_only_fps": 1.0 / c,
