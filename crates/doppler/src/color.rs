@@ -174,6 +174,12 @@ impl ColorFlow {
         let power_min = noise_power * 10f32.powf((c.threshold_db - c.gain_db) as f32 / 10.0);
         let tissue_dphi = k_shift * scene.tissue_velocity as f32;
         let frame_off = (self.frame.wrapping_mul(0x9E37_79B9) % TABLE as u64) as usize;
+        // Phasors advanced by one rotation per pulse (a complex multiply
+        // instead of a sine and cosine per sample). The tissue's rotation
+        // is the frame's, and that of a pixel without blood (v = 0) too:
+        // computed once, not per pixel.
+        let rot_t = Complex::from_polar(1.0, tissue_dphi);
+        let rot_still = Complex::from_polar(1.0, k_shift * 0.0);
         for (i, &depth) in self.row_depth.iter().enumerate() {
             for (j, &lat) in self.col_lateral.iter().enumerate() {
                 let p = i * self.columns + j;
@@ -190,20 +196,16 @@ impl ColorFlow {
                     out(p, g, None);
                     continue;
                 }
-                let (v_ax, blood) = match scene.blood_at(lat, depth) {
-                    Some((v, rho)) => (v.profile.velocity(v.axial_velocity, rho) as f32, 1.0f32),
-                    None => (0.0, 0.0),
+                let (rot_b, blood) = match scene.blood_at(lat, depth) {
+                    Some((v, rho)) => {
+                        let v_ax = v.profile.velocity(v.axial_velocity, rho) as f32;
+                        (Complex::from_polar(1.0, k_shift * v_ax), 1.0f32)
+                    }
+                    None => (rot_still, 0.0),
                 };
-                let dphi = k_shift * v_ax;
                 let base = (p.wrapping_mul(2_654_435_761) + frame_off) % TABLE;
                 let a_blood = self.table[base] * blood;
                 let a_tissue = self.table[(base + 7919) % TABLE] * (clutter_gain * g as f32);
-                // Phasors advanced by one rotation per pulse (a complex
-                // multiply instead of a sine and cosine per sample).
-                let (rot_b, rot_t) = (
-                    Complex::from_polar(1.0, dphi),
-                    Complex::from_polar(1.0, tissue_dphi),
-                );
                 let (mut pb, mut pt) = (a_blood, a_tissue);
                 for (k, e) in self.ens.iter_mut().enumerate() {
                     let n = self.table[(base + 31 + 97 * k) % TABLE] * self.noise_sigma;
