@@ -1,8 +1,8 @@
 //! `echothigh bench image --doppler`: colour flow frames per second at the
 //! live size (256 × 384) on one core — the B-mode frame, the flow scene
-//! and the colour overlay each timed (`color` is scene plus overlay), and together — on the section of a
-//! normal lean leg at `fv-proximal` (four vessels) with the probe tilted
-//! 20°, and PW spectral lines per second (default `[doppler.pw]`: 512
+//! and the colour overlay each timed (`color` is scene plus overlay), and
+//! together — on the section of a normal lean leg at `fv-proximal` (four
+//! vessels) with the probe tilted 20°, and PW spectral lines per second (default `[doppler.pw]`: 512
 //! scatterers, 4 kHz PRF, 128-point FFT, 20 pulses per line) with the
 //! sound synthesized from each line. Medians of the thread's CPU time.
 
