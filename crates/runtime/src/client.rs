@@ -179,10 +179,15 @@ pub fn run_client<D: TickDevice + Send + 'static>(
                 break;
             }
             let t0 = *started.get_or_insert(now);
+            // Until the first physics sample the startup grace applies: the
+            // handshake's Welcome marks the peer heard, but the server steps
+            // only once this side's first pose has reached it, a round trip
+            // through both loops' start (seen in `app/tests/faults.rs` on two
+            // busy cores: 0.25 s passed with no sample and the client quit).
             let silent = link.peer_closed()
                 || match link.last_heard() {
-                    Some(_) => link.peer_silent(now, peer_timeout),
-                    None => now - t0 > peer_timeout.max(2.0),
+                    Some(_) if sink.count() > 0 => link.peer_silent(now, peer_timeout),
+                    _ => now - t0 > peer_timeout.max(2.0),
                 };
             if silent && lost_at.is_none() {
                 tracing::warn!(
