@@ -72,16 +72,50 @@ try {
       await page.textContent('#exam-vignette'));
     for (const site of open.sites) {
       // The probe over the site's level: s = centre_s − z (the live state
-      // gives level_s for the probe's z), pressed 12 mm in, then lifted.
+      // gives level_s for the probe's z), and over its vein, pressed 12 mm
+      // in, then lifted.
       const z = await page.evaluate((s) => {
         const st = window.echothigh.state;
         return st.level_s + st.probe_position[2] - s;
       }, site.s);
       const before = await page.evaluate(() => window.echothigh.state.exam.presses);
-      await page.evaluate((z) => window.echothigh.send({ type: 'probe', theta: 0, z, depth: 0.012, tilt: 0 }), z);
+      // Over the site's vein (the exam status's angle that centres it).
+      const theta = site.theta ?? 0;
+      await page.evaluate(([z, theta]) => window.echothigh.send({ type: 'probe', theta, z, depth: 0.012, tilt: 0 }), [z, theta]);
       await until(page, () => Math.hypot(...window.echothigh.state.rendered_force) > 2.0, null,
         `a press at ${site.name}`);
       await page.waitForTimeout(400);
+      // The gauge's target band (issue 19), the probe over the site's vein:
+      // the section reading's band (healthy walls meet → artery clearly
+      // oval, N of tissue force), ordered, its lower end (a healthy vein's
+      // walls meet) within the device's limit on this leg (issue 12 sets
+      // the scale so; the upper end is the artery's force at the present
+      // indentation, which falls as the press deepens), drawn where the gauge's
+      // scale puts it (state and box are read in one synchronous
+      // evaluation, so from the same state: to the style's rounding, 0.05 %
+      // of the bar), and labelled.
+      // The imaging thread draws the site's section a few frames after
+      // the probe arrives (sections are built off the frame loop).
+      await until(page, (s) => {
+        const sec = window.echothigh.state.section;
+        return sec && Math.abs(sec.s - s) < 0.01 && sec.target_band[1] > 0 ? true : null;
+      }, site.s, `the section at ${site.name} with its target band`);
+      const band = await page.evaluate(() => {
+        const s = window.echothigh.state;
+        const b = document.getElementById('gauge-band');
+        return {
+          band: s.section && s.section.target_band, max: s.max_force, hidden: b.hidden,
+          bottom: parseFloat(b.style.bottom), height: parseFloat(b.style.height),
+          top: Math.max(s.max_force * 1.25, 1), label: document.getElementById('gauge-target').textContent,
+        };
+      });
+      const [lo, hi] = band.band || [0, 0];
+      check(`case ${k}: the gauge shows the target band at ${site.name}`,
+        !band.hidden && lo > 0 && hi > lo && lo <= band.max &&
+          Math.abs(band.bottom - (lo / band.top) * 100) <= 0.051 && band.height > 0 &&
+          /^target \d+(\.\d)?–\d+(\.\d)? N$/.test(band.label),
+        `band ${lo.toFixed(1)}–${hi.toFixed(1)} N (limit ${band.max.toFixed(1)} N), box at ${band.bottom}% + ${band.height}%, "${band.label}"`);
+      if (k === 1) await page.screenshot({ path: join(shots, `06-exam-band-${site.name}.png`) });
       await page.evaluate(() => window.echothigh.send({ type: 'lift' }));
       const after = await until(page, (n) => {
         const e = window.echothigh.state.exam;

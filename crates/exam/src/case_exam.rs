@@ -100,6 +100,45 @@ impl CaseExam {
         }
     }
 
+    /// Goes on with an attempt at `case` under `protocol` whose `events`,
+    /// `calls` and `doppler_calls` were recorded before a restart (issue 19):
+    /// the coverage, the sites done and the peak force follow from the
+    /// events as they did when each was kept; the calls stand as recorded
+    /// (with the truth they were scored against). Nothing is sent to a log:
+    /// these records are already there. The case's clock goes on from its
+    /// last record ([`Self::last_time`]).
+    pub fn resume(
+        case: &Case,
+        protocol: Protocol,
+        events: Vec<CompressionEvent>,
+        calls: Vec<Call>,
+        doppler_calls: Vec<DopplerCall>,
+    ) -> CaseExam {
+        let mut x = CaseExam::new(case, protocol);
+        for e in &events {
+            x.peak_force = x.peak_force.max(e.peak_force);
+            x.coverage.apply(e);
+            x.coverage.mark_done(&mut x.sites);
+            x.last_t = x.last_t.max(e.t_end);
+        }
+        for t in calls
+            .iter()
+            .map(|c| c.t)
+            .chain(doppler_calls.iter().map(|c| c.t))
+        {
+            x.last_t = x.last_t.max(t);
+        }
+        x.events = events;
+        x.calls = calls;
+        x.doppler_calls = doppler_calls;
+        x
+    }
+
+    /// Time of the case's latest sample, event or call (s since it started).
+    pub fn last_time(&self) -> f64 {
+        self.last_t
+    }
+
     /// Feeds one sample of the live state; a press that ends with it is
     /// applied to the coverage and sent to `log`, and returned.
     pub fn observe(

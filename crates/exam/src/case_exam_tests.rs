@@ -346,3 +346,60 @@ fn a_failing_log_loses_no_record_in_memory() {
     assert_eq!(x.score(), healthy.score.as_ref());
     assert_eq!(x.score(), good.score());
 }
+
+/// A restart mid-case (issue 19): an attempt resumed from its recorded
+/// events and calls shows the same checklist, coverage and peak force as
+/// the attempt it continues, logs nothing again, and, after the same
+/// further press and calls, scores exactly as one uninterrupted attempt.
+#[test]
+fn a_resumed_attempt_goes_on_as_if_never_interrupted() {
+    use crate::{DopplerFinding, FlowPattern};
+    let c = case("isolated-fv-mid-acute");
+    let site = |x: &CaseExam, n: &str| x.sites().iter().find(|s| s.name == n).unwrap().clone();
+    let whole = CaseExam::new(&c, Protocol::ThreePoint);
+    let (cfv, mid) = (site(&whole, "cfv"), site(&whole, "fv-mid"));
+    // Before the restart: the CFV closes, a call and a Doppler call.
+    let before = |x: &mut CaseExam, log: &mut MemoryLog| {
+        let t = press(x, log, 0.0, "cfv", cfv.s, 10.0, 0.02, 0.95);
+        x.call("cfv", Finding::Normal, t + 0.5, log).unwrap();
+        let d = DopplerFinding {
+            flow: FlowPattern::Phasic,
+            augments: true,
+        };
+        x.call_doppler("cfv", d, t + 1.0, log).unwrap();
+    };
+    // After it: the mid-thigh FV stays open with the artery deformed.
+    let after = |x: &mut CaseExam, log: &mut MemoryLog, t0: f64| {
+        let t = press(x, log, t0, "fv", mid.s, 18.0, 0.9, 0.85);
+        x.call("fv-mid", Finding::AcuteDvt, t + 0.5, log).unwrap();
+        x.finish(t + 1.0, log).unwrap()
+    };
+    let mut whole = whole;
+    let mut log = MemoryLog::default();
+    before(&mut whole, &mut log);
+    // The latest record is the Doppler call, after the press's last sample.
+    let resumed_at = log.doppler[0].t;
+    assert!(resumed_at > whole.last_time());
+    let mut resumed = CaseExam::resume(
+        &c,
+        Protocol::ThreePoint,
+        log.events.clone(),
+        log.calls.clone(),
+        log.doppler.clone(),
+    );
+    assert_eq!(resumed.last_time(), resumed_at);
+    assert_eq!(resumed.sites(), whole.sites());
+    assert_eq!(resumed.coverage().bins(), whole.coverage().bins());
+    assert_eq!(resumed.peak_force(), whole.peak_force());
+    assert_eq!(resumed.call_at("cfv"), Some(Finding::Normal));
+    let mut log2 = MemoryLog::default();
+    let t0 = resumed_at + 2.0;
+    let a = after(&mut whole, &mut log, t0);
+    let b = after(&mut resumed, &mut log2, t0);
+    assert_eq!(a, b);
+    // The resumed attempt logged only what came after the restart.
+    assert_eq!(
+        (log2.events.len(), log2.calls.len(), log2.doppler.len()),
+        (1, 1, 0)
+    );
+}

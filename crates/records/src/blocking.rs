@@ -216,6 +216,21 @@ impl BlockingStore {
     pub fn case_detail(&self, id: i64) -> Result<CaseDetail, RecordsError> {
         self.run(move |s| async move { s.case_detail(id).await })
     }
+
+    /// [`Store::open_session`].
+    pub fn open_session(
+        &self,
+        trainee: &str,
+        protocol: &str,
+    ) -> Result<Option<crate::ResumedSession>, RecordsError> {
+        let (t, p) = (trainee.to_string(), protocol.to_string());
+        self.run(move |s| async move { s.open_session(&t, &p).await })
+    }
+
+    /// [`Store::end_session_at`].
+    pub fn end_session_at(&self, session: SessionId, ended_ms: i64) -> Result<(), RecordsError> {
+        self.run(move |s| async move { s.end_session_at(session, ended_ms).await })
+    }
 }
 
 fn url_hint() -> String {

@@ -90,6 +90,42 @@ impl SessionRecorder {
         })
     }
 
+    /// A recorder that goes on with `session`, a session of `trainee` that
+    /// never ended ([`crate::Store::open_session`]): later cases join it,
+    /// and [`Self::continue_case`] writes on into its unfinished attempt.
+    /// The session's records so far are kept as journal lines, so that a
+    /// database failing later still leaves a self-contained journal.
+    pub fn resume(
+        store: BlockingStore,
+        trainee: &str,
+        session: &crate::ResumedSession,
+    ) -> Result<SessionRecorder, RecordsError> {
+        let r = SessionRecorder::new(store, trainee)?;
+        {
+            let mut s = lock(&r.shared);
+            s.session = Some(session.key.clone());
+            s.session_id = Some(session.id);
+            s.pending = session.journal_lines();
+        }
+        Ok(r)
+    }
+
+    /// Writes on into the attempt `case` of the resumed session: its events,
+    /// calls and Doppler calls continue their numbering.
+    pub fn continue_case(&self, case: &crate::ResumedCase) -> CaseWriter {
+        let d = &case.detail;
+        CaseWriter {
+            shared: self.shared.clone(),
+            key: case.key.clone(),
+            id: Some(case.id),
+            seq: [
+                d.events.len() as u32,
+                d.calls.len() as u32,
+                d.doppler_calls.len() as u32,
+            ],
+        }
+    }
+
     /// The database.
     pub fn store(&self) -> BlockingStore {
         lock(&self.shared).store.clone()

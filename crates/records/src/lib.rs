@@ -33,6 +33,7 @@ mod fallback;
 mod import;
 pub mod journal;
 mod read;
+mod resume;
 pub mod schema;
 pub mod stats;
 mod store;
@@ -46,6 +47,7 @@ pub use journal::{CaseKey, SessionKey};
 pub use read::{
     CaseDetail, CaseSummary, ScoreNumbers, SessionRecord, SiteStats, TraineeHistory, TraineeSummary,
 };
+pub use resume::{ResumedCase, ResumedSession};
 pub use store::{
     now_ms, validate_name, CaseId, SessionId, Store, Trainee, TruthSegment, MAX_NAME_CHARS,
 };

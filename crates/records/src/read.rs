@@ -175,7 +175,11 @@ impl Store {
             .ok_or_else(|| self.bad_row(table, id, format!("unknown finding `{name}`")))
     }
 
-    async fn rows(&self, sql: String, trainee: Option<i64>) -> Result<Vec<AnyRow>, RecordsError> {
+    pub(crate) async fn rows(
+        &self,
+        sql: String,
+        trainee: Option<i64>,
+    ) -> Result<Vec<AnyRow>, RecordsError> {
         let q = sqlx::query(&sql);
         let q = match trainee {
             Some(t) => q.bind(t),
@@ -257,7 +261,7 @@ impl Store {
         Ok(Loaded { cases, outcomes })
     }
 
-    fn get<'r, T>(&self, r: &'r AnyRow, i: usize) -> Result<T, RecordsError>
+    pub(crate) fn get<'r, T>(&self, r: &'r AnyRow, i: usize) -> Result<T, RecordsError>
     where
         T: sqlx::Decode<'r, sqlx::Any> + sqlx::Type<sqlx::Any>,
     {

@@ -68,6 +68,14 @@ pub struct SectionReading {
     /// follows the level, `crate::image_depth`).
     #[serde(default)]
     pub image_depth: f64,
+    /// The target band under the probe (N of tissue force, issue 19): the
+    /// force at which a healthy vein here meets its walls, then the force
+    /// at which the artery is clearly oval
+    /// (`echothigh_imaging::Renderer::target_band`, with
+    /// [`COAPTED_RATIO`]); `[0, 0]` when there is none (the elliptic
+    /// cylinder's phantom-free section always has one).
+    #[serde(default)]
+    pub target_band: [f64; 2],
 }
 
 impl SectionReading {
@@ -79,6 +87,7 @@ impl SectionReading {
             artery_lumen_ratio: finite(self.artery_lumen_ratio),
             time: finite(self.time),
             image_depth: finite(self.image_depth),
+            target_band: self.target_band.map(finite),
             ..*self
         }
     }

@@ -64,6 +64,12 @@ pub struct SiteStatus {
     pub done: bool,
     /// The trainee's latest call there.
     pub call: Option<Finding>,
+    /// The probe angle that centres the site's vein in the image (rad, the
+    /// page's `theta` of a probe command: `−θ_leg` of
+    /// `echothigh_anatomy::Anatomy::pose_over`); `None` where the vein
+    /// cannot be centred.
+    #[serde(default)]
+    pub theta: Option<f64>,
 }
 
 /// One Doppler site of the open case.

@@ -339,6 +339,12 @@ fn reading(case: &Case, z: f64, f: f64, time: f64) -> SectionReading {
         frame: 0,
         time,
         image_depth: 0.060,
+        // Its walls meet at 0.9 of FAKE_CLOSING; its artery is at 0.8 of
+        // its lumen (the double's "clearly oval") 8 N past its onset.
+        target_band: [
+            (1.0 - COAPTED_RATIO) * FAKE_CLOSING,
+            FAKE_ARTERY_ONSET + 8.0,
+        ],
     }
 }
 

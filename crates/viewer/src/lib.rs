@@ -33,7 +33,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 pub use exam::sink::{CaseLog, DbSink, MemorySink, RecordSink};
-pub use exam::{ExamPlan, ExamSession};
+pub use exam::{ExamPlan, ExamSession, OpenAttempt, ResumePoint};
 pub use server::ServerConfig;
 
 /// Arguments of `echothigh view`.

@@ -71,14 +71,28 @@ pub struct AppState {
 
 impl AppState {
     /// Wraps the live system; `exam` holds the trainee's session.
-    pub fn new(control: Arc<dyn LiveControl>, exam: ExamSession, config: ServerConfig) -> Self {
+    /// A server's state over `control`, with the exam session `exam`. A
+    /// resumed session's case under way is loaded into the live system at
+    /// once (its leg, its thrombi); if it cannot be, the case is dropped
+    /// unscored (its records stay) and the page is told why.
+    pub fn new(control: Arc<dyn LiveControl>, mut exam: ExamSession, config: ServerConfig) -> Self {
+        let mut exam_leg = false;
+        if let Some(case) = exam.open_case().cloned() {
+            match control.set_case(Some(&case)) {
+                Ok(()) => exam_leg = true,
+                Err(e) => {
+                    exam.abandon();
+                    exam.report(format!("could not load the resumed case: {e}"));
+                }
+            }
+        }
         Self {
             control,
             exam: Mutex::new(exam),
             config,
             owner: Mutex::new((None, 0)),
             mesh_epoch: std::sync::atomic::AtomicU64::new(0),
-            exam_leg: std::sync::atomic::AtomicBool::new(false),
+            exam_leg: std::sync::atomic::AtomicBool::new(exam_leg),
         }
     }
 
@@ -109,10 +123,11 @@ impl AppState {
         }
     }
 
-    /// Leaves exam mode (the server is stopping): an open case stays
-    /// unfinished in the records, the session's records are closed.
+    /// The server is stopping: an open case stays unfinished in the
+    /// records, and the session stays open for the next server to resume
+    /// unless it is over ([`ExamSession::suspend`]).
     pub(crate) fn end_exam(&self) {
-        self.exam().stop();
+        self.exam().suspend();
     }
 
     /// Copies the live state into `out`.

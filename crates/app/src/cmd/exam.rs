@@ -58,6 +58,11 @@ pub struct Args {
     /// Viewer: the seed of the case order or of the generator (default: random).
     #[arg(long)]
     pub seed: Option<u64>,
+    /// Viewer: start a new session even when the trainee has one that never
+    /// ended under this protocol (by default it is resumed: a restart of the
+    /// server keeps the exam session).
+    #[arg(long)]
+    pub new_session: bool,
     /// Viewer: TCP port; 0 picks a free one (the URL printed says which).
     #[arg(long, default_value_t = 8080)]
     pub port: u16,

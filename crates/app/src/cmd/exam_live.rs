@@ -55,6 +55,79 @@ fn cases_in(dir: &Path) -> Result<Vec<Case>> {
         .collect()
 }
 
+/// The session's plan: `--protocol` and the cases.
+fn plan_of(args: &Args, trainee: &str) -> Result<echothigh_viewer::ExamPlan> {
+    let protocol = Protocol::from_name(&args.protocol).with_context(|| {
+        format!(
+            "--protocol `{}`: expected two-point, three-point or whole-leg",
+            args.protocol
+        )
+    })?;
+    Ok(echothigh_viewer::ExamPlan {
+        trainee: Some(trainee.to_string()),
+        protocol,
+        cases: cases(args)?,
+    })
+}
+
+/// The exam session: the trainee's session under this protocol that never
+/// ended, resumed (issue 19: a restart of the server keeps it), unless
+/// `--new-session`; else a new one. A session whose cases are not among
+/// this run's (other `--cases`, another seed of `--generate`) cannot go on:
+/// it is ended now, saying so, and a new one begins.
+fn session(
+    args: &Args,
+    store: BlockingStore,
+    trainee: &str,
+    plan: echothigh_viewer::ExamPlan,
+) -> Result<echothigh_viewer::ExamSession> {
+    let protocol = plan.protocol.name();
+    let (n, describe) = (plan.cases.len(), echothigh_viewer::RecordSink::describe);
+    let open = match args.new_session {
+        true => None,
+        false => store.open_session(trainee, protocol)?,
+    };
+    if let Some(open) = open {
+        let (sink, point) = echothigh_viewer::DbSink::resume(store.clone(), trainee, &open)?;
+        let (done, under_way) = (
+            point.attempted.iter().filter(|(_, s)| s.is_some()).count(),
+            point.open.as_ref().map(|o| o.case.clone()),
+        );
+        let what = describe(&sink);
+        match echothigh_viewer::ExamSession::resume(plan, Box::new(sink), point) {
+            Ok(session) => {
+                eprintln!(
+                    "exam: {trainee}, {protocol} protocol: resuming the session begun at {} (Unix ms), \
+                     {done} of {n} cases done{}; {what} (--new-session starts another)",
+                    open.key.started_ms,
+                    under_way.map_or(String::new(), |c| format!(", case {c} under way"))
+                );
+                return Ok(session);
+            }
+            Err(why) => {
+                store.end_session_at(open.id, echothigh_records::now_ms())?;
+                eprintln!(
+                    "exam: {trainee}'s unfinished session (begun at {} Unix ms) cannot go on: {why}; \
+                     it is ended now and a new session begins",
+                    open.key.started_ms
+                );
+                // The plan went with the refused resume: build it again.
+                return session(args, store, trainee, plan_of(args, trainee)?);
+            }
+        }
+    }
+    let sink = echothigh_viewer::DbSink::new(store, trainee)?;
+    eprintln!(
+        "exam: {trainee}, {protocol} protocol, {n} cases, {}",
+        describe(&sink)
+    );
+    Ok(echothigh_viewer::ExamSession::new(
+        plan,
+        Box::new(sink),
+        false,
+    ))
+}
+
 /// Runs the viewer in exam mode for `--trainee`.
 pub fn run(args: &Args) -> Result<()> {
     let Some(trainee) = args.trainee.as_deref() else {
@@ -63,29 +136,12 @@ pub fn run(args: &Args) -> Result<()> {
     if args.case.is_some() || args.json {
         bail!("--case and --json go with --script (a scripted, headless exam)");
     }
-    let protocol = Protocol::from_name(&args.protocol).with_context(|| {
-        format!(
-            "--protocol `{}`: expected two-point, three-point or whole-leg",
-            args.protocol
-        )
-    })?;
-    let plan = echothigh_viewer::ExamPlan {
-        trainee: Some(trainee.to_string()),
-        protocol,
-        cases: cases(args)?,
-    };
+    let plan = plan_of(args, trainee)?;
     // The device before the database: a missing driver is said first.
     let kind = echothigh_runtime::scenario::Scenario::default().device.kind;
     let device = super::live_device::open(&args.device, kind)?;
     let store = BlockingStore::open(args.db.as_deref())?;
-    let sink = echothigh_viewer::DbSink::new(store, trainee)?;
-    eprintln!(
-        "exam: {trainee}, {} protocol, {} cases, {}",
-        protocol.name(),
-        plan.cases.len(),
-        echothigh_viewer::RecordSink::describe(&sink)
-    );
-    let session = echothigh_viewer::ExamSession::new(plan, Box::new(sink), false);
+    let session = session(args, store, trainee, plan)?;
     let view = echothigh_viewer::Args {
         scenario: None,
         port: args.port,

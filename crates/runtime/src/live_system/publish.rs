@@ -262,6 +262,10 @@ fn imaging_loop(
         let lumens = renderer
             .lumens(&frame)
             .map_err(|e| anyhow::anyhow!("imaging: the frame's lumens: {e}"))?;
+        let band = renderer
+            .target_band(&frame, COAPTED_RATIO)
+            .map_err(|e| anyhow::anyhow!("imaging: the frame's target band: {e}"))?
+            .map_or([0.0; 2], |b| [b.walls_meet, b.artery_clearly_oval]);
         match source.flow_parts(&no_thrombi) {
             Some((renderer, ctx)) => flow.frame(
                 doppler,
@@ -297,6 +301,7 @@ fn imaging_loop(
                 frame: frame_no,
                 time: input.time,
                 image_depth: drawn_depth,
+                target_band: band,
             }
         }));
         next += period;

@@ -208,7 +208,7 @@ function onState(s) {
   notify('state', s);
   const rendered = norm(s.rendered_force), physics = norm(s.physics_force);
   plot.push(s.time, rendered, physics);
-  gauge.update(rendered, physics, s.max_force);
+  gauge.update(rendered, physics, s.max_force, s.section && s.section.target_band);
   if (scene) scene.updateState(s);
   showStatus(s, renderedFps);
   syncControls(s);

@@ -29,8 +29,8 @@ const STEPS = [
     done: (s) => s.section !== null,
   },
   {
-    text: 'Press (wheel, or W) until the vein\'s walls meet. A vein that stays open while its artery starts to flatten holds a clot.',
-    device: 'Press into the thigh until the vein\'s walls meet. A vein that stays open while its artery starts to flatten holds a clot.',
+    text: 'Press (wheel, or W) into the blue target band of the force gauge, until the vein\'s walls meet. A vein that stays open while its artery starts to flatten holds a clot.',
+    device: 'Press into the thigh, into the blue target band of the force gauge, until the vein\'s walls meet. A vein that stays open while its artery starts to flatten holds a clot.',
     done: (s) => s.section !== null && (s.section.walls_met || s.section.artery_lumen_ratio < ARTERY_CUE),
   },
   {

@@ -86,6 +86,8 @@ export class Gauge {
     this.limitLabel = q('#gauge-limit-label');
     this.value = q('#gauge-value');
     this.tissueValue = q('#gauge-tissue-value');
+    this.band = q('#gauge-band');
+    this.target = q('#gauge-target');
     this.scaleOf = null; // the maxForce the ticks were drawn for
   }
 
@@ -109,8 +111,13 @@ export class Gauge {
     }
   }
 
-  /** `felt` and `tissue` forces (N, tissue units); `maxForce` (N): the device's limit in tissue units. */
-  update(felt, tissue, maxForce) {
+  /**
+   * `felt` and `tissue` forces (N, tissue units); `maxForce` (N): the
+   * device's limit in tissue units; `band`: the target band under the probe
+   * `[walls meet, artery clearly oval]` (N of tissue force, the section
+   * reading's `target_band`), or null / `[0, 0]` for none.
+   */
+  update(felt, tissue, maxForce, band) {
     const top = Math.max(maxForce * 1.25, 1);
     if (this.scaleOf !== maxForce) {
       this.scaleOf = maxForce;
@@ -127,6 +134,17 @@ export class Gauge {
     this.value.textContent = `${felt.toFixed(1)} N`;
     this.tissueValue.textContent = `tissue ${tissue.toFixed(1)} N`;
     this.bar.setAttribute('aria-valuenow', felt.toFixed(1));
+    const on = Array.isArray(band) && band[1] > band[0] && band[0] >= 0;
+    this.band.hidden = !on;
+    this.target.hidden = !on;
+    if (on) {
+      const [lo, hi] = band.map((f) => Math.min(f / top, 1) * 100);
+      this.band.style.bottom = `${lo.toFixed(1)}%`;
+      this.band.style.height = `${(hi - lo).toFixed(1)}%`;
+      const fmt = (f) => f.toFixed(f < 10 ? 1 : 0);
+      this.target.textContent = `target ${fmt(band[0])}–${fmt(band[1])} N`;
+      this.band.title = `target: a healthy vein here meets its walls at ${band[0].toFixed(1)} N; its artery is clearly oval at ${band[1].toFixed(1)} N (tissue force)`;
+    }
   }
 }
 

@@ -6,9 +6,11 @@
 
 mod observer;
 mod plan;
+mod resume;
 mod session;
 pub mod sink;
 
 pub use observer::{sample, ExamObserver};
 pub use plan::ExamPlan;
+pub use resume::{OpenAttempt, ResumePoint};
 pub use session::ExamSession;

@@ -38,18 +38,30 @@ struct Open {
     /// The trainee has moved the probe since the case opened: only then do
     /// the samples count (the case's own reset is not the trainee's press).
     armed: bool,
+    /// Each site's probe angle over its vein ([`SiteStatus::theta`]),
+    /// computed once when the case opens.
+    thetas: Vec<Option<f64>>,
+}
+
+/// The probe angle (page convention) over each of `exam`'s sites on `case`.
+fn site_thetas(case: &Case, exam: &CaseExam) -> Vec<Option<f64>> {
+    let a = &case.anatomy;
+    exam.sites()
+        .iter()
+        .map(|x| a.pose_over(x.s, a.deep_vein_at(x.s)).ok().map(|p| -p.theta))
+        .collect()
 }
 
 /// A trainee's exam session.
 pub struct ExamSession {
-    plan: ExamPlan,
+    pub(super) plan: ExamPlan,
     sink: Box<dyn RecordSink>,
     /// Index of the next case of the plan.
-    next: usize,
+    pub(super) next: usize,
     /// The plan starts over once examined (practice).
     cycle: bool,
     open: Option<Open>,
-    status: ExamStatus,
+    pub(super) status: ExamStatus,
 }
 
 impl ExamSession {
@@ -89,9 +101,11 @@ impl ExamSession {
         let index = self.next;
         let case = &self.plan.cases[index];
         let log = self.sink.begin_case(case, self.plan.protocol)?;
+        let exam = CaseExam::new(case, self.plan.protocol);
         self.open = Some(Open {
             index,
-            exam: CaseExam::new(case, self.plan.protocol),
+            thetas: site_thetas(case, &exam),
+            exam,
             log,
             started: Instant::now(),
             armed: false,
@@ -104,10 +118,45 @@ impl ExamSession {
         Ok(&self.plan.cases[index])
     }
 
+    /// Reopens the plan's case `index` as `exam`, writing on with `log`,
+    /// its clock going on from the exam's last record (a resumed session,
+    /// [`super::resume`]). The trainee's samples count once the probe
+    /// moves, as in a case just started.
+    pub(super) fn reopen(&mut self, index: usize, exam: CaseExam, log: CaseLog) {
+        let case = &self.plan.cases[index];
+        let back = std::time::Duration::from_secs_f64(exam.last_time().clamp(0.0, 1e6));
+        let now = Instant::now();
+        self.open = Some(Open {
+            index,
+            thetas: site_thetas(case, &exam),
+            exam,
+            log,
+            started: now.checked_sub(back).unwrap_or(now),
+            armed: false,
+        });
+        self.status.active = true;
+        self.status.error = None;
+    }
+
     /// Drops the open case unscored (the live system could not load it, or
     /// the trainee left): its records so far stay, unfinished.
     pub fn abandon(&mut self) {
         if self.open.take().is_some() {
+            self.refresh();
+        }
+    }
+
+    /// The server is stopping: an open case stays unfinished in the
+    /// records, and the session stays open for the next server to resume
+    /// ([`super::resume`]) unless every case of the plan has been examined,
+    /// when it ends as [`Self::stop`] ends it.
+    pub fn suspend(&mut self) {
+        let examined = !self.cycle && self.open.is_none() && self.next >= self.plan.cases.len();
+        if examined {
+            self.stop();
+        } else {
+            self.open = None;
+            self.status.active = false;
             self.refresh();
         }
     }
@@ -241,6 +290,11 @@ impl ExamSession {
         self.sink.store()
     }
 
+    /// The open case, if any.
+    pub fn open_case(&self) -> Option<&Case> {
+        self.open.as_ref().map(|o| &self.plan.cases[o.index])
+    }
+
     /// Whether a case is open (its truth must stay hidden).
     pub fn is_open(&self) -> bool {
         self.open.is_some()
@@ -254,7 +308,7 @@ impl ExamSession {
     /// Rebuilds the page's view of the open case and bumps the revision.
     /// A records fault (the database failed: where the records are kept
     /// now) replaces `recording` and stands in `error` until a later error.
-    fn refresh(&mut self) {
+    pub(super) fn refresh(&mut self) {
         let fault = self
             .open
             .as_ref()
@@ -277,12 +331,14 @@ impl ExamSession {
                     .exam
                     .sites()
                     .iter()
-                    .map(|x| SiteStatus {
+                    .zip(&o.thetas)
+                    .map(|(x, &theta)| SiteStatus {
                         name: x.name.clone(),
                         vein: x.vein.clone(),
                         s: x.s,
                         done: x.done,
                         call: o.exam.call_at(&x.name),
+                        theta,
                     })
                     .collect();
                 st.doppler = o

@@ -106,6 +106,21 @@ impl DbSink {
         })
     }
 
+    /// A sink that goes on with `session`, a session of `trainee` that
+    /// never ended, and the resume point of its records (the last attempt,
+    /// if unfinished, reopened into the same rows).
+    pub fn resume(
+        store: echothigh_records::BlockingStore,
+        trainee: &str,
+        session: &echothigh_records::ResumedSession,
+    ) -> Result<(DbSink, super::ResumePoint), echothigh_records::RecordsError> {
+        let recorder = echothigh_records::SessionRecorder::resume(store, trainee, session)?;
+        let point = super::ResumePoint::of_records(session, |c| {
+            Box::new(recorder.continue_case(c)) as CaseLog
+        });
+        Ok((DbSink { recorder }, point))
+    }
+
     /// The session's recorder (its fault and journal).
     pub fn recorder(&self) -> &echothigh_records::SessionRecorder {
         &self.recorder

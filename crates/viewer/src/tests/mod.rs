@@ -5,5 +5,6 @@
 mod device;
 mod doppler;
 mod protocol;
+mod resume;
 mod server;
 mod state_json;

@@ -201,6 +201,7 @@ fn sanitized_zeroes_every_non_finite_number_and_keeps_the_rest() {
             frame: 7,
             time: f64::NEG_INFINITY,
             image_depth: 0.060,
+            target_band: [f64::NAN, 30.0],
         }),
     };
     let expected = LiveStatus {
@@ -231,6 +232,7 @@ fn sanitized_zeroes_every_non_finite_number_and_keeps_the_rest() {
             frame: 7,
             time: 0.0,
             image_depth: 0.060,
+            target_band: [0.0, 30.0],
         }),
     };
     assert_eq!(status.sanitized(), expected);
@@ -252,6 +254,7 @@ fn the_state_carries_the_section_reading() {
         frame: 12,
         time: 3.5,
         image_depth: 0.060,
+        target_band: [9.5, 28.0],
     });
     let state = ViewState::from_snapshot(&snap, None, None);
     let j = serde_json::to_value(ServerMessage::State(state)).unwrap();
@@ -263,6 +266,7 @@ fn the_state_carries_the_section_reading() {
     assert_eq!(r["walls_met"], true);
     assert_eq!(r["frame"], 12);
     assert_eq!(r["time"], 3.5);
+    assert_eq!(r["target_band"], serde_json::json!([9.5, 28.0]));
     let none = ViewState::from_snapshot(&LiveSnapshot::default(), None, None);
     let j = serde_json::to_value(ServerMessage::State(none)).unwrap();
     assert!(j["section"].is_null(), "{j}");
