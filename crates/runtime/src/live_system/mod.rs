@@ -25,6 +25,7 @@ mod doppler_tests;
 mod hardware_loop;
 mod imaging_source;
 mod publish;
+mod route;
 mod session;
 mod shared;
 
@@ -45,6 +46,7 @@ use echothigh_imaging::SectionDeformation;
 use echothigh_model::{LegSurface, ThighGeometry};
 use nalgebra::{UnitQuaternion, Vector3};
 use publish::ImagingThread;
+use route::{HandRoute, Placement};
 use session::{start_session, Carried, Session};
 use shared::{vein_code, vein_of, HandTarget, ImageInput, ImageSlot, Shared};
 use std::sync::atomic::{AtomicU8, AtomicUsize, Ordering};
@@ -655,15 +657,32 @@ impl LiveSystem {
                 depth,
                 tilt,
             } => {
-                let t =
-                    target_on_surface(&inner.scenario, inner.leg.as_ref(), theta, z, depth, tilt)?;
-                inner.target = t;
+                // A far move goes over the skin, not through the leg
+                // (`route`): lifted, along the lifted surface, and down.
+                let (t0, z0, tilt0) = inner.placement;
+                let from = Placement {
+                    theta: t0,
+                    z: z0,
+                    depth: 0.0,
+                    tilt: tilt0,
+                };
+                let to = Placement {
+                    theta,
+                    z,
+                    depth,
+                    tilt,
+                };
+                let (scenario, leg) = (&inner.scenario, inner.leg.as_ref());
+                let way = route::route(from, to, LIFTED_DEPTH, |p| {
+                    target_on_surface(scenario, leg, p.theta, p.z, p.depth, p.tilt)
+                })?;
+                inner.target = way.destination();
                 inner.placement = (theta, z, tilt);
                 if inner.exam {
                     return Err("the scripted exam is playing: stop it to drive the probe".into());
                 }
                 if let Some(s) = inner.session.as_mut() {
-                    s.target.write(t);
+                    s.target.write(way);
                 }
                 Ok(())
             }
@@ -671,7 +690,7 @@ impl LiveSystem {
                 let t = lifted(inner.target, 0.03);
                 inner.target = t;
                 if let Some(s) = inner.session.as_mut() {
-                    s.target.write(t);
+                    s.target.write(HandRoute::to(t));
                 }
                 Ok(())
             }

@@ -8,6 +8,7 @@
 
 use super::hardware_loop::{self, BoxedDevice, DeviceLoop, SkinNormal};
 use super::publish::Publisher;
+use super::route::{HandRoute, RouteFollower};
 use super::shared::{HandTarget, HapticStatus, Shared};
 use crate::haptic_side::{haptic_side_for, SampleSink};
 use crate::live::CouplingMode;
@@ -63,8 +64,8 @@ pub(super) struct Session {
     /// The haptic loop: returns the physics it stepped (`direct`) and the device.
     haptic: JoinHandle<(Option<PhysicsSide>, Driver)>,
     others: Vec<JoinHandle<()>>,
-    /// The hand's target, read by the haptic loop.
-    pub target: triple_buffer::Input<HandTarget>,
+    /// The hand's route to its target, read by the haptic loop.
+    pub target: triple_buffer::Input<HandRoute>,
 }
 
 impl Session {
@@ -113,7 +114,7 @@ pub(super) fn start_session(
 ) -> Result<Session> {
     let c = scenario.coupling.clone();
     let stop = Arc::new(AtomicBool::new(false));
-    let (target_in, mut target_out) = triple_buffer::triple_buffer(&target);
+    let (target_in, mut target_out) = triple_buffer::triple_buffer(&HandRoute::to(target));
     let (status_in, status_out) = triple_buffer::triple_buffer(&HapticStatus::default());
     *shared
         .haptic
@@ -261,14 +262,16 @@ pub(super) fn start_session(
         .name("haptic-loop".into())
         .spawn(move || {
             raise_priority();
+            let mut follower = RouteFollower::new(HandRoute::to(target));
             runner.run(&st, None, |_, _| {
                 let now = clock.now();
-                let tgt = *target_out.read();
                 if !exam {
                     if let Some(h) = tick.device_mut().hand_mut() {
+                        let at = h.setpoint();
+                        let tgt = follower.target(target_out.read(), [at.x, at.y, at.z]);
                         h.slew_towards(Vec3::from(tgt.position), HAND_REACH_SPEED, period);
+                        tick.set_orientation(tgt.orientation);
                     }
-                    tick.set_orientation(tgt.orientation);
                 }
                 if let Err(e) = tick.tick(now, &mut observer) {
                     sh.report_fault("haptic", &e);

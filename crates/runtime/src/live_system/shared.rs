@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicU8, AtomicUsize};
 use std::sync::Mutex;
 
 /// Where the hand wants the probe.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(super) struct HandTarget {
     /// Setpoint of the probe face centre (m).
     pub position: [f64; 3],
