@@ -197,6 +197,21 @@ impl Scenario {
         d
     }
 
+    /// A real device drives the probe: its own peak force (N, device units,
+    /// from its SDK's limits) replaces `[device] max_force`, so that the
+    /// patient's force scale ([`Self::device`]) and the page's limit follow
+    /// the hardware in the hand (a Touch's 3.3 N, an omega.6's 12 N), not
+    /// the simulated device's. Refuses a peak that is not a positive,
+    /// finite force.
+    pub fn set_device_peak(&mut self, peak: f64) -> Result<()> {
+        anyhow::ensure!(
+            peak.is_finite() && peak > 0.0,
+            "the device's peak force must be a positive, finite force (N), got {peak}"
+        );
+        self.device.max_force = peak;
+        Ok(())
+    }
+
     /// Checks every section, naming the offending key.
     pub fn validate(&self) -> Result<()> {
         self.model_config()

@@ -77,3 +77,30 @@ fn a_patient_file_with_a_bad_exam_force_is_refused_naming_it() {
         assert!(e.contains("exam_force"), "{bad}: {e}");
     }
 }
+
+/// A real device's own peak force sets the scale (issue 12): a Touch's
+/// 3.3 N is scaled to stand for the lean leg's 35 N exam force; an
+/// omega.6's 12 N at the configured 0.3 already renders 40 N and keeps
+/// it; a peak that is not a positive, finite force is refused, naming it.
+#[test]
+fn a_real_devices_peak_sets_the_scale() {
+    for peak in [3.3, 12.0] {
+        let mut s = on("lean-male");
+        s.set_device_peak(peak).unwrap();
+        let d = s.device();
+        assert_eq!(d.max_force, peak);
+        let exam = Patient::preset("lean-male").unwrap().exam_force;
+        let want = s.device.force_scale.min(peak / exam);
+        assert!(
+            (d.force_scale - want).abs() < 1e-12,
+            "{peak} N: {}",
+            d.force_scale
+        );
+        assert!(d.max_force / d.force_scale >= exam - 1e-9, "{peak} N");
+    }
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        let mut s = on("lean-male");
+        let e = s.set_device_peak(bad).unwrap_err().to_string();
+        assert!(e.contains("peak force"), "{e}");
+    }
+}

@@ -190,6 +190,11 @@ pub fn run(args: Args) -> Result<()> {
     }
     // The device first: a missing driver is said before any file is made.
     let device = args.device.open(scenario.device.kind)?;
+    // A real device's own peak force sets the patient's force scale.
+    let mut scenario = scenario;
+    if let Some(d) = &device {
+        scenario.set_device_peak(d.max_force())?;
+    }
     let dir = args.out.clone().unwrap_or_else(|| default_out("run"));
     let stop = stop_on_signals()?;
     let d = scenario.run.duration;

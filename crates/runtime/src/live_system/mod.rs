@@ -212,6 +212,9 @@ impl LiveSystem {
         };
         let base_thigh = scenario.thigh.clone();
         let mut scenario = scenario;
+        if let Some(info) = &device_info {
+            scenario.set_device_peak(info.max_force)?;
+        }
         if let Some(c) = case {
             scenario.set_patient(c.anatomy.patient())?;
             scenario.patient.vein = echothigh_imaging::VeinState::Healthy;

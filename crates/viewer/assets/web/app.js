@@ -366,9 +366,32 @@ $('take-control').addEventListener('click', () => send({ type: 'take_control' })
 
 // ---- frame loop ----------------------------------------------------------
 let fpsWindow = { t: performance.now(), frames: 0, echo: 0 };
+// The leg is drawn when something changed, and at least every
+// REDRAW_MS (a change the page did not flag, e.g. a resize). When the
+// animation frames come slowly (the smoothed interval above SLOW_MS: a
+// software-rendered page on a busy machine), the 3D view's resolution is
+// lowered in steps (to half at most), and raised again once frames come
+// quickly (below FAST_MS), at most one step a second, so that drawing the
+// leg leaves the page free to take the states as they come (issue 19's
+// lag) and the simulation its cores.
+const REDRAW_MS = 500, SLOW_MS = 60, FAST_MS = 30;
+const adapt = { last: performance.now(), smooth: 16, changed: performance.now(), drawn: 0, rendered: false };
+/** Smooths the intervals that follow a drawn frame (what drawing costs) and steps the scale. */
+function adaptScale(now) {
+  const dt = now - adapt.last;
+  adapt.last = now;
+  if (adapt.rendered) adapt.smooth += 0.1 * (Math.min(dt, 1000) - adapt.smooth);
+  adapt.rendered = false;
+  if (!scene || now - adapt.changed < 1000) return;
+  if (adapt.smooth > SLOW_MS && scene.scale > 0.5) { scene.setScale(scene.scale * 0.8); adapt.changed = now; }
+  else if (adapt.smooth < FAST_MS && scene.scale < 1) { scene.setScale(scene.scale / 0.8); adapt.changed = now; }
+}
 function frame(now) {
   flushProbe();
-  if (scene) { scene.render(); stamp(live.arrivals.render); }
+  adaptScale(now);
+  if (scene && (scene.dirty || now - adapt.drawn > REDRAW_MS)) {
+    scene.render(); adapt.drawn = now; adapt.rendered = true; stamp(live.arrivals.render);
+  }
   plot.draw();
   fpsWindow.frames += 1;
   if (now - fpsWindow.t >= 1000) {

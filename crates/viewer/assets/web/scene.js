@@ -28,6 +28,12 @@ export class ThighScene {
     // preserveDrawingBuffer lets tests and screenshots read the pixels back.
     this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+    // Resolution scale (1: the screen's pixels): lowered by the page when
+    // frames come slowly (software WebGL on a busy laptop), so that drawing
+    // the leg does not starve the state handling and the simulation.
+    this.scale = 1;
+    // Something changed since the last render (the page draws only then).
+    this.dirty = true;
     this.scene = new THREE.Scene();
     this.scene.background = new THREE.Color(BACKGROUND);
     this.camera = new THREE.PerspectiveCamera(40, 1, 0.005, 10);
@@ -81,6 +87,7 @@ export class ThighScene {
 
   /** Builds the thigh from the server's `hello` mesh ({rest: [[x,y,z]], triangles: [[a,b,c]]}). */
   setMesh(mesh) {
+    this.dirty = true;
     if (this.thigh) { this.scene.remove(this.thigh); this.thigh.geometry.dispose(); }
     const n = mesh.rest.length;
     const rest = new Float32Array(n * 3);
@@ -119,6 +126,7 @@ export class ThighScene {
 
   /** Applies a surface frame: `positions` (3n f32, m) and `compression` (n f32, 0..1). */
   updateSurface(positions, compression) {
+    this.dirty = true;
     if (!this.thigh) return;
     const geom = this.thigh.geometry;
     const pos = geom.attributes.position;
@@ -135,6 +143,7 @@ export class ThighScene {
 
   /** Places the probe, markers and force arrows from a `state` message. */
   updateState(s) {
+    this.dirty = true;
     this.onLeg = s.level != null;
     const v = (a) => new THREE.Vector3(a[0], a[1], a[2]);
     const [w, x, y, z] = s.probe_orientation;
@@ -180,17 +189,30 @@ export class ThighScene {
   }
 
   rotate(dx, dy) {
+    this.dirty = true;
     this.orbit.azimuth -= dx * 0.008;
     this.orbit.elevation = Math.min(Math.max(this.orbit.elevation + dy * 0.008, -1.45), 1.45);
   }
 
   zoom(factor) {
+    this.dirty = true;
     this.orbit.distance = Math.min(Math.max(this.orbit.distance * factor, 0.15), 3);
+  }
+
+  /** Sets the resolution scale (0.5–1 of the screen's pixels). */
+  setScale(scale) {
+    const s = Math.min(Math.max(scale, 0.5), 1);
+    if (s === this.scale) return;
+    this.scale = s;
+    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2) * s);
+    this.size = null;
+    this.dirty = true;
   }
 
   render() {
     const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
     if (w === 0 || h === 0) return;
+    this.dirty = false;
     const size = `${w}x${h}`;
     if (this.size !== size) {
       this.size = size;
