@@ -10,7 +10,7 @@
 //! [press]
 //! policy = "adequate"        # adequate | target
 //! target_force = 10.0        # N: policy "target" stops here
-//! max_force = 20.0           # N: the cap of policy "adequate"
+//! max_force = 20.0           # N: the cap of policy "adequate" (default: the patient's exam force)
 //! rate = 0.05                # m/s: the hand's setpoint speed into the skin
 //! hold = 0.3                 # s: the hold at the deepest point
 //!
@@ -59,11 +59,16 @@ pub struct PressConfig {
     /// the top of clinical compression forces (`[exam]` phases' docs).
     /// Default 10 (the default scenario's exam force).
     pub target_force: f64,
-    /// The cap (N) of an `adequate` press, in [1.5, 40]. Default 20: the
-    /// tissue force the default device renders at its configured scale
-    /// (6 N / 0.3; fidelity review §4 item 9), which closes a healthy vein
-    /// at every level of the lean and average legs (`tests/coaptation_along_leg.rs`).
-    pub max_force: f64,
+    /// The cap (N) of an `adequate` press, in [1.5, 40] when given. Default
+    /// (absent): the case's patient's exam force
+    /// (`echothigh_anatomy::Patient::exam_force`, 35–49 N on the presets),
+    /// the force at which the artery is clearly oval at the leg's hardest
+    /// level and the device's renderable limit (issue 12), so that an
+    /// adequate press can close a healthy vein at every level of every
+    /// preset (the obese leg's need 12–22 N, `tests/coaptation_along_leg.rs`;
+    /// the former fixed 20 N stopped short there).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_force: Option<f64>,
     /// The hand's setpoint speed into the skin (m/s), in [0.005, 0.2].
     /// Default 0.05.
     pub rate: f64,
@@ -77,7 +82,7 @@ impl Default for PressConfig {
         PressConfig {
             policy: PressPolicy::Adequate,
             target_force: 10.0,
-            max_force: 20.0,
+            max_force: None,
             rate: 0.05,
             hold: 0.3,
         }
@@ -192,7 +197,13 @@ impl TraineeScript {
         let p = &self.press;
         for (key, v, lo, hi, unit) in [
             ("press.target_force", p.target_force, 1.5, 40.0, "N"),
-            ("press.max_force", p.max_force, 1.5, 40.0, "N"),
+            (
+                "press.max_force",
+                p.max_force.unwrap_or(20.0),
+                1.5,
+                40.0,
+                "N",
+            ),
             ("press.rate", p.rate, 0.005, 0.2, "m/s"),
             ("press.hold", p.hold, 0.0, 5.0, "s"),
         ] {

@@ -236,13 +236,16 @@ impl<'a> Walker<'a> {
             Ok((h.setpoint() - goal).norm() < 1e-9)
         })?;
         let p = self.script.press.clone();
+        let cap = p
+            .max_force
+            .unwrap_or(self.leg.anatomy().patient().exam_force);
         let max_depth = self.max_depth;
         self.until("press", here, |w, now| {
             let l = now.look;
             let done = match p.policy {
                 PressPolicy::Target => now.force >= p.target_force,
                 PressPolicy::Adequate => {
-                    now.force >= p.max_force
+                    now.force >= cap
                         || (now.force > CONTACT_ON
                             && (l.vein_ratio < COAPTATION || l.artery_ratio < ARTERY_CUE))
                 }

@@ -163,3 +163,27 @@ fn thorough_trainee_finds_the_isolated_fv_thrombus() {
         .iter()
         .any(|c| c.finding == Finding::AcuteDvt && c.vein == "fv"));
 }
+
+/// The thorough trainee on the obese leg (issue 12: the force scale and
+/// the device's limits must let a trainee close a healthy vein there): an
+/// adequate press, capped at the patient's exam force (49 N) instead of
+/// the former fixed 20 N, closes every imageable bin and every call is
+/// right. (Measured: the hardest bin, FV at 210 mm, coapted at 20.0 N, at
+/// the former cap; `coaptation_along_leg.rs` presses straight in and finds
+/// 12–22 N.)
+#[test]
+fn thorough_trainee_closes_every_bin_of_the_obese_leg() {
+    let (out, log) = walk(&script("exam-thorough"), "normal-obese");
+    let lost: Vec<&str> = out
+        .unexaminable
+        .iter()
+        .map(|(x, _)| x.name.as_str())
+        .collect();
+    assert!(lost.is_empty(), "not examinable: {lost:?}");
+    for b in &log.coverage {
+        assert_eq!(b.state, echothigh_exam::BinState::Closed, "{b:?}");
+    }
+    assert!(log.calls.iter().all(|c| c.is_correct()));
+    let peak = log.events.iter().map(|e| e.peak_force).fold(0.0, f64::max);
+    eprintln!("obese: peak press {peak:.1} N");
+}
