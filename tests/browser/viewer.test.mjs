@@ -410,6 +410,39 @@ try {
   check('a malformed message gets an error and the connection stays up', true,
     await page.evaluate(() => window.echothigh.lastError));
 
+  // The vessels named on the image (issue 19: a hint in practice mode).
+  // The probe is swept medially around mid-thigh, 0.2 rad at a time, 8 mm
+  // in, until the imaging thread reports a vessel in the image; with the
+  // hint asked for, the image then shows its outline in the vein's blue or
+  // the artery's red (pixels whose channels match one of them to ±40: the
+  // gray image has none), and every label is a vessel's id inside the
+  // image's width and depth.
+  await page.check('#hint');
+  let labelled = null;
+  for (let theta = 0; theta >= -1.6 && !labelled; theta -= 0.2) {
+    await page.evaluate((theta) => window.echothigh.send({ type: 'probe', theta, z: 0, depth: 0.008, tilt: 0 }), theta);
+    labelled = await until(page, () => {
+      const sec = window.echothigh.state.section;
+      const l = sec && sec.labels.filter((x) => x.id);
+      return l && l.length ? { labels: l, depth: sec.image_depth, width: window.echothigh.hello.image.width } : null;
+    }, null, 'a labelled vessel', 4000).catch(() => null);
+  }
+  const hinted = labelled && await until(page, () => {
+    const c = document.getElementById('echo');
+    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    const near = (i, [r, g, b]) => Math.abs(d[i] - r) < 40 && Math.abs(d[i + 1] - g) < 40 && Math.abs(d[i + 2] - b) < 40;
+    let n = 0;
+    for (let i = 0; i < d.length; i += 4) if (near(i, [0x6b, 0xb6, 0xff]) || near(i, [0xff, 0x6b, 0x6b])) n++;
+    return n > 20 ? n : null;
+  }, null, 'the vessel outlines drawn', 10000).catch(() => null);
+  const ids = labelled ? labelled.labels.map((l) => l.id) : [];
+  check('the hint names the vessels on the image',
+    !!labelled && !!hinted && labelled.labels.every((l) => /^(cfv|cfa|gsv|dfv|dfa|fv|fa|pv|pa|fv2)$/.test(l.id) &&
+      Math.abs(l.lateral) <= labelled.width / 2 && l.depth > 0 && l.depth <= labelled.depth),
+    labelled ? `${ids.join(', ')}; ${hinted} outline pixels` : 'no vessel in the image over the sweep');
+  await page.screenshot({ path: join(shots, '02c-hint.png') });
+  await page.uncheck('#hint');
+
   // One exam case (issue 14; `view`'s practice session draws the library's
   // cases, three-point): the truth stays on the server, the checklist shows
   // a call per site, a press and its release are detected from the live
@@ -420,6 +453,7 @@ try {
     return e && e.open && window.echothigh.state.vein === null ? e : null;
   }, null, 'an open exam case with the vein hidden');
   check('exam hides the vein state', await page.isDisabled('#vein'));
+  check('the vessel-name hint is off during an exam case', await page.isDisabled('#hint'));
   const selects = await page.$$('#exam-sites select[data-site]');
   const dopplerSelects = await page.$$('#exam-sites select[data-doppler]');
   check('the protocol checklist has a call per site, and a Doppler call per Doppler site',

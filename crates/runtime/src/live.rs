@@ -38,6 +38,24 @@ pub struct LiveMesh {
 /// vein's dark-pixel ratio 0.03 at 10 N, `tests/case_compression.rs`).
 pub const COAPTED_RATIO: f64 = 0.10;
 
+/// Most vessels named on the image ([`SectionReading::labels`]).
+pub const MAX_LABELS: usize = 8;
+
+/// A vessel of the drawn section, where the image shows it (issue 19: the
+/// vessels named on the image when the trainee asks for a hint).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct VesselLabel {
+    /// The vessel (`cfv`, `cfa`, `gsv`, …); `None`: an empty slot.
+    pub id: Option<StructureId>,
+    /// Its lumen's centre across the image (m from the probe's centre,
+    /// positive to the image's right).
+    pub lateral: f64,
+    /// Its lumen's centre below the probe face (m).
+    pub depth: f64,
+    /// Its lumen's half-width and half-height (m), as drawn.
+    pub radii: [f64; 2],
+}
+
 /// The section under the probe as the imaging thread last drew it (issue
 /// 13, for the live exam's event detector of issue 14): published with each
 /// frame, lock-free, and carried in [`LiveStatus::section`]. The ratios are
@@ -76,6 +94,10 @@ pub struct SectionReading {
     /// cylinder's phantom-free section always has one).
     #[serde(default)]
     pub target_band: [f64; 2],
+    /// The drawn vessels inside the image, named (the first
+    /// [`MAX_LABELS`]; empty slots last).
+    #[serde(default)]
+    pub labels: [VesselLabel; MAX_LABELS],
 }
 
 impl SectionReading {
@@ -88,6 +110,12 @@ impl SectionReading {
             time: finite(self.time),
             image_depth: finite(self.image_depth),
             target_band: self.target_band.map(finite),
+            labels: self.labels.map(|l| VesselLabel {
+                lateral: finite(l.lateral),
+                depth: finite(l.depth),
+                radii: l.radii.map(finite),
+                ..l
+            }),
             ..*self
         }
     }

@@ -28,7 +28,7 @@
 use crate::section_image::section_anatomy_with;
 use anyhow::{Context, Result};
 use echothigh_anatomy::section::MAX_ANGLE;
-use echothigh_anatomy::{frame, Anatomy, ProbePose, Thrombi};
+use echothigh_anatomy::{frame, Anatomy, ProbePose, StructureId, Thrombi};
 use echothigh_imaging::{AnatomyConfig, ImagingConfig, MaterialWindow, Renderer, VeinState};
 use echothigh_model::{LegSurface, Vec3};
 use nalgebra::{Quaternion, UnitQuaternion};
@@ -96,6 +96,9 @@ pub struct SectionImager {
     threshold: f64,
     rebuilds: u64,
     last_error: Option<String>,
+    /// The ids of the drawn vessels, in the renderer's order (empty when the
+    /// anatomy was not the leg's section).
+    names: Vec<Option<StructureId>>,
 }
 
 impl SectionImager {
@@ -123,16 +126,16 @@ impl SectionImager {
         thrombi: Option<Arc<Thrombi>>,
     ) -> Result<Self> {
         let t = thrombi.as_deref();
-        let (renderer, threshold, last_error) = match Self::build(&leg, cfg, vein, &pose, None, t)?
-        {
-            Outcome::Built(r, t) => (*r, t, None),
-            Outcome::Undrawable(e) => {
-                match Self::build(&leg, cfg, vein, &pose, Some(&cfg.anatomy), t)? {
-                    Outcome::Built(r, t) => (*r, t, Some(e)),
-                    Outcome::Undrawable(e2) => anyhow::bail!("imaging: {e2}"),
+        let (renderer, threshold, last_error, names) =
+            match Self::build(&leg, cfg, vein, &pose, None, t)? {
+                Outcome::Built(r, t, n) => (*r, t, None, n),
+                Outcome::Undrawable(e) => {
+                    match Self::build(&leg, cfg, vein, &pose, Some(&cfg.anatomy), t)? {
+                        Outcome::Built(r, t, n) => (*r, t, Some(e), n),
+                        Outcome::Undrawable(e2) => anyhow::bail!("imaging: {e2}"),
+                    }
                 }
-            }
-        };
+            };
         Ok(SectionImager {
             leg,
             cfg: cfg.clone(),
@@ -144,6 +147,7 @@ impl SectionImager {
             threshold,
             rebuilds: 0,
             last_error,
+            names,
         })
     }
 
@@ -173,6 +177,7 @@ impl SectionImager {
             dx
         };
         let mut c = cfg.clone();
+        let from_section = anatomy.is_none();
         // The pan only spans the travel between rebuilds (plus a column
         // of rounding each way), which keeps the field small.
         c.pan_range = threshold + 2.0 * dx;
@@ -195,7 +200,17 @@ impl SectionImager {
         };
         let r =
             Renderer::in_tissue(&c, vein, window).map_err(|e| anyhow::anyhow!("imaging: {e}"))?;
-        Ok(Outcome::Built(Box::new(r), threshold))
+        let names = if from_section {
+            crate::section_image::vessel_ids(
+                &section,
+                pose.s,
+                leg_anatomy.deep_vein_at(pose.s),
+                &c.anatomy,
+            )
+        } else {
+            Vec::new()
+        };
+        Ok(Outcome::Built(Box::new(r), threshold, names))
     }
 
     /// Follows the probe to `pose` on the calling thread: rebuilds the
@@ -252,8 +267,9 @@ impl SectionImager {
             return false;
         }
         match b.outcome {
-            Outcome::Built(r, t) => {
+            Outcome::Built(r, t, names) => {
                 self.renderer = *r;
+                self.names = names;
                 self.built = b.pose;
                 self.threshold = t;
                 self.rebuilds += 1;
@@ -304,7 +320,7 @@ impl SectionImager {
     pub fn set_vein(&mut self, vein: VeinState) -> Result<()> {
         if vein != self.vein {
             let drawn = self.renderer.config().anatomy.clone();
-            if let Outcome::Built(r, _) =
+            if let Outcome::Built(r, _, _) =
                 Self::build(&self.leg, &self.cfg, vein, &self.built, Some(&drawn), None)?
             {
                 self.renderer = *r;
@@ -312,6 +328,18 @@ impl SectionImager {
             self.vein = vein;
         }
         Ok(())
+    }
+
+    /// The renderer and [`Self::vessel_ids`] together.
+    pub fn renderer_and_ids(&mut self) -> (&mut Renderer, &[Option<StructureId>]) {
+        (&mut self.renderer, &self.names)
+    }
+
+    /// The ids of the drawn vessels in the renderer's order
+    /// (`echothigh_imaging::Anatomy::vessels`); empty when the drawn anatomy
+    /// is not the leg's section (none could be drawn here).
+    pub fn vessel_ids(&self) -> &[Option<StructureId>] {
+        &self.names
     }
 
     /// The case's thrombus segments it draws, if any.
@@ -393,8 +421,8 @@ pub struct SectionBuild {
 /// What [`SectionImager::build`] made.
 #[derive(Debug)]
 enum Outcome {
-    /// A renderer and its threshold (m).
-    Built(Box<Renderer>, f64),
+    /// A renderer, its threshold (m) and its vessels' ids.
+    Built(Box<Renderer>, f64, Vec<Option<StructureId>>),
     /// Why the section cannot be drawn.
     Undrawable(String),
 }

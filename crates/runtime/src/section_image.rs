@@ -70,18 +70,7 @@ pub fn section_anatomy_with(
         Ok((e.lateral, e.depth, 2.0 * (e.radii[0] * e.radii[1]).sqrt()))
     };
     let (vl, vd, vdia) = cut(vein_id)?;
-    // Between the CFA's bifurcation and the profunda's confluence the CFV
-    // runs with the (superficial) femoral artery: the CFA has ended.
-    let artery = match artery_of(vein_id) {
-        StructureId::Cfa if section.get(StructureId::Cfa).is_none() => StructureId::Fa,
-        a if section.get(a).is_none() => nearest_cut(
-            &section,
-            &[StructureId::Cfa, StructureId::Fa, StructureId::Pa],
-            pose.s,
-        )
-        .unwrap_or(a),
-        a => a,
-    };
+    let artery = drawn_artery(&section, vein_id, pose.s);
     let (al, ad, adia) = cut(artery)?;
     // Below the knee joint the femur has ended: the tibia is the bone
     // under the popliteal vessels down to the trifurcation.
@@ -145,6 +134,52 @@ fn studied_vein(section: &Section, level: StructureId, s: f64) -> StructureId {
         s,
     )
     .unwrap_or(level)
+}
+
+/// The artery drawn with the studied vein `vein_id` in `section` (at the
+/// probe's `s`): its companion, except between the CFA's bifurcation and
+/// the profunda's confluence, where the CFV runs with the (superficial)
+/// femoral artery (the CFA has ended), or the nearest artery the plane cuts.
+fn drawn_artery(section: &Section, vein_id: StructureId, s: f64) -> StructureId {
+    match artery_of(vein_id) {
+        StructureId::Cfa if section.get(StructureId::Cfa).is_none() => StructureId::Fa,
+        a if section.get(a).is_none() => nearest_cut(
+            section,
+            &[StructureId::Cfa, StructureId::Fa, StructureId::Pa],
+            s,
+        )
+        .unwrap_or(a),
+        a => a,
+    }
+}
+
+/// The ids of the vessels a renderer built from [`section_anatomy_with`]'s
+/// config `config` draws, in its order (`echothigh_imaging::Anatomy::vessels`:
+/// the studied vein, its artery, then the extra vessels), from `section`
+/// at the probe's `s`; an extra vessel whose name is no structure's id is
+/// `None`.
+pub fn vessel_ids(
+    section: &Section,
+    s: f64,
+    level_vein: StructureId,
+    config: &AnatomyConfig,
+) -> Vec<Option<StructureId>> {
+    let vein = studied_vein(section, level_vein, s);
+    let mut ids = vec![Some(vein), Some(drawn_artery(section, vein, s))];
+    ids.extend(
+        config
+            .structures
+            .iter()
+            .filter(|x| matches!(x.kind, StructureKind::Vein | StructureKind::Artery))
+            .map(|x| {
+                section
+                    .structures
+                    .iter()
+                    .map(|y| y.id)
+                    .find(|id| id.as_str() == x.name)
+            }),
+    );
+    ids
 }
 
 /// Of `ids`, the one the section cuts at the `s` nearest `s`.

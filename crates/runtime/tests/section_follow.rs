@@ -331,3 +331,35 @@ fn the_live_image_shows_the_section_under_the_probe_at_two_sites() {
     assert_eq!(snap.fault, None);
     system.shutdown().unwrap();
 }
+
+/// The drawn vessels are named in the renderer's order (issue 19's hint):
+/// one id per vessel, the studied vein first and its artery second; the
+/// great saphenous vein is among the extras just below the
+/// saphenofemoral junction, and at mid-thigh the pair is the femoral vein
+/// and artery.
+#[test]
+fn the_drawn_vessels_are_named_in_the_renderers_order() {
+    let (leg, cfg) = leg_and_config();
+    for (site, vein, artery) in [
+        (Site::Sfj, StructureId::Cfv, None),
+        (Site::FvMid, StructureId::Fv, Some(StructureId::Fa)),
+    ] {
+        let pose = leg.anatomy().site_pose(site);
+        let im = SectionImager::new(leg.clone(), &cfg, VeinState::Healthy, pose).unwrap();
+        let ids = im.vessel_ids();
+        let n = im.renderer_ref().anatomy().unwrap().vessels().len();
+        assert_eq!(ids.len(), n, "{site:?}: {ids:?}");
+        assert_eq!(ids[0], Some(vein), "{site:?}: {ids:?}");
+        let a = ids[1].expect("an artery");
+        assert!(
+            matches!(a, StructureId::Cfa | StructureId::Fa | StructureId::Pa),
+            "{a:?}"
+        );
+        if let Some(want) = artery {
+            assert_eq!(a, want, "{site:?}");
+        }
+        if site == Site::Sfj {
+            assert!(ids.contains(&Some(StructureId::Gsv)), "{ids:?}");
+        }
+    }
+}

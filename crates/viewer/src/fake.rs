@@ -345,6 +345,7 @@ fn reading(case: &Case, z: f64, f: f64, time: f64) -> SectionReading {
             (1.0 - COAPTED_RATIO) * FAKE_CLOSING,
             FAKE_ARTERY_ONSET + 8.0,
         ],
+        labels: Default::default(),
     }
 }
 

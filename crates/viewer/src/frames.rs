@@ -103,11 +103,13 @@ impl WireState {
     }
 
     /// The image frame for `pixels` (as described by `info`), or `None` if
-    /// this connection already has that frame or it is malformed. The frame:
+    /// this connection already has that frame, it is malformed, or it is
+    /// frame 0 (the image slot before the imaging thread's first render:
+    /// black, which a page would show until the next frame). The frame:
     /// header (`a` = width, `b` = height), the f64 time (s), then a PNG.
     pub fn image(&mut self, info: ImageInfo, pixels: &[u8]) -> Option<Vec<u8>> {
         let n = info.width as usize * info.height as usize;
-        if n == 0 || pixels.len() < n || self.last_frame == Some(info.frame) {
+        if n == 0 || info.frame == 0 || pixels.len() < n || self.last_frame == Some(info.frame) {
             return None;
         }
         let pixels = &pixels[..n];

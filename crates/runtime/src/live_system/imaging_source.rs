@@ -75,6 +75,18 @@ impl Drop for Worker {
 /// The drawn section's `s` (m) and the deep vein it studies.
 pub(super) type Studied = (f64, StructureId);
 
+/// What [`Source::frame`] gives the imaging thread for one frame.
+pub(super) struct SourceFrame<'a> {
+    /// The renderer to draw with.
+    pub renderer: &'a mut Renderer,
+    /// The frame's lateral offset (m).
+    pub lateral_offset: f64,
+    /// On the leg, the drawn section's `s` (m) and its deep vein.
+    pub studied: Option<Studied>,
+    /// The ids of the renderer's vessels in its order (empty off the leg).
+    pub ids: &'a [Option<StructureId>],
+}
+
 /// What the imaging thread renders.
 pub(super) enum Source {
     /// The scenario's `[imaging.anatomy]`.
@@ -131,15 +143,17 @@ impl Source {
     /// Follows the probe (on the leg: installs a finished section, asks
     /// for a new one when due and none is under way, moves the plane
     /// across the slice) and returns the renderer, the frame's lateral
-    /// offset (m) and, on the leg, the drawn section's `s` (m) and the deep
-    /// vein it studies.
-    pub fn frame(
-        &mut self,
-        input: &Probe,
-        vein: VeinState,
-    ) -> Result<(&mut Renderer, f64, Option<Studied>)> {
+    /// offset (m), on the leg the drawn section's `s` (m) and the deep
+    /// vein it studies, and the ids of the renderer's vessels in its order
+    /// (empty on the elliptic cylinder).
+    pub fn frame(&mut self, input: &Probe, vein: VeinState) -> Result<SourceFrame<'_>> {
         match self {
-            Source::Fixed(r) => Ok((r, input.lateral_offset, None)),
+            Source::Fixed(r) => Ok(SourceFrame {
+                renderer: r,
+                lateral_offset: input.lateral_offset,
+                studied: None,
+                ids: &[],
+            }),
             Source::Leg(f, w) => {
                 match w.built.try_recv() {
                     Ok(b) => {
@@ -169,7 +183,13 @@ impl Source {
                 };
                 let s = f.built_pose().s;
                 let studied = (s, f.leg().anatomy().deep_vein_at(s));
-                Ok((f.renderer(), offset, Some(studied)))
+                let (renderer, ids) = f.renderer_and_ids();
+                Ok(SourceFrame {
+                    renderer,
+                    lateral_offset: offset,
+                    studied: Some(studied),
+                    ids,
+                })
             }
         }
     }

@@ -4,12 +4,12 @@
 use super::doppler::{DopplerShared, FlowImaging};
 use super::imaging_source::{Probe, Source};
 use super::shared::{vein_of, Shared};
-use crate::live::{SectionReading, COAPTED_RATIO};
+use crate::live::{SectionReading, VesselLabel, COAPTED_RATIO, MAX_LABELS};
 use crate::physics_side::{self, PhysicsSide};
 use crate::scenario::Scenario;
 use crate::section::{lateral_offset, section_deformation, SectionScratch};
 use anyhow::{Context, Result};
-use echothigh_anatomy::{Levels, Thrombi};
+use echothigh_anatomy::{Levels, StructureId, Thrombi};
 use echothigh_imaging::{Anatomy, FrameInput, ImagingConfig, SectionDeformation, VeinState};
 use echothigh_model::{LegSurface, ThighGeometry};
 use echothigh_transport::ProbeMsg;
@@ -236,7 +236,12 @@ fn imaging_loop(
                 orientation: i.probe_orientation,
             }
         };
-        let (renderer, lateral_offset, studied) = source.frame(&input, vein_of(vein))?;
+        let super::imaging_source::SourceFrame {
+            renderer,
+            lateral_offset,
+            studied,
+            ids,
+        } = source.frame(&input, vein_of(vein))?;
         if let Some(a) = renderer.anatomy() {
             // The drawn section's femur (the deformation falls to 0 there);
             // kept below the deepest skin displacement, which the model's
@@ -262,6 +267,7 @@ fn imaging_loop(
         let lumens = renderer
             .lumens(&frame)
             .map_err(|e| anyhow::anyhow!("imaging: the frame's lumens: {e}"))?;
+        let labels = vessel_labels(renderer, &frame, ids)?;
         let band = renderer
             .target_band(&frame, COAPTED_RATIO)
             .map_err(|e| anyhow::anyhow!("imaging: the frame's target band: {e}"))?
@@ -302,6 +308,7 @@ fn imaging_loop(
                 time: input.time,
                 image_depth: drawn_depth,
                 target_band: band,
+                labels,
             }
         }));
         next += period;
@@ -313,6 +320,40 @@ fn imaging_loop(
         }
     }
     Ok(())
+}
+
+/// The vessels of the frame inside the image, with their ids (`ids`, in
+/// the renderer's vessel order; none on the elliptic cylinder): where each
+/// lumen is drawn ([`echothigh_imaging::Renderer::vessel_lumen`]).
+fn vessel_labels(
+    renderer: &echothigh_imaging::Renderer,
+    frame: &FrameInput,
+    ids: &[Option<StructureId>],
+) -> Result<[VesselLabel; MAX_LABELS]> {
+    let mut out = [VesselLabel::default(); MAX_LABELS];
+    let (half, depth) = (0.5 * renderer.config().width, renderer.config().depth);
+    let mut n = 0;
+    for (i, id) in ids.iter().enumerate() {
+        let (Some(id), true) = (id, n < MAX_LABELS) else {
+            continue;
+        };
+        let Some(l) = renderer
+            .vessel_lumen(i, frame)
+            .map_err(|e| anyhow::anyhow!("imaging: a vessel's lumen: {e}"))?
+        else {
+            break;
+        };
+        if l.lateral.abs() <= half && l.depth > 0.0 && l.depth <= depth {
+            out[n] = VesselLabel {
+                id: Some(*id),
+                lateral: l.lateral,
+                depth: l.depth,
+                radii: [l.half_width, l.half_height],
+            };
+            n += 1;
+        }
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 // server's `view/protocol.rs` (JSON envelopes {v, type, ...}; binary frames
 // with a 16-byte header "ETHV", version, kind, a, b).
 import { ThighScene } from './scene.js';
-import { EchoView, ForcePlot, Gauge, drawDepthScale, norm, showStatus } from './panels.js';
+import { EchoView, ForcePlot, Gauge, drawDepthScale, drawVesselNames, norm, showStatus } from './panels.js';
 import { showExam } from './exam.js';
 import { deviceDrives, showDevice } from './device.js';
 import { Guide } from './guide.js';
@@ -170,8 +170,18 @@ function imageDepth() {
   if (sec && sec.image_depth > 0) return sec.image_depth;
   return live.hello && live.hello.image ? live.hello.image.depth : 0;
 }
+/** Whether the vessels are named on the image: asked for, and no exam case open. */
+function hintOn() {
+  const e = live.state && live.state.exam;
+  return $('hint').checked && !(e && e.open);
+}
 function decorateEcho(ctx, w, h) {
   drawDepthScale(ctx, w, h, imageDepth());
+  const sec = live.state && live.state.section;
+  if (sec && hintOn()) {
+    const width = live.hello && live.hello.image ? live.hello.image.width : 0;
+    drawVesselNames(ctx, w, h, sec.labels, width, imageDepth());
+  }
   doppler.decorate(ctx, w, h);
 }
 function showImage(w, h, px, time, overlay = null) {
@@ -217,6 +227,7 @@ function onState(s) {
   guide.update(s, live.probe, deviceDrives(s));
   doppler.update(s.doppler);
   $('observer').hidden = !s.observer;
+  $('hint').disabled = !!(s.exam && s.exam.open);
   showBehind(s);
 }
 

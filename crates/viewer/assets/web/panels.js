@@ -68,6 +68,38 @@ export function drawDepthScale(ctx, w, h, depth) {
   ctx.restore();
 }
 
+/** Clinical abbreviations of the vessels named on the image. */
+const VESSEL_NAMES = {
+  cfv: 'CFV', cfa: 'CFA', gsv: 'GSV', dfv: 'DFV', dfa: 'DFA', fv: 'FV', fa: 'FA',
+  pv: 'PV', pa: 'PA', fv2: 'FV (duplicate)',
+};
+
+/**
+ * The vessels named over the image (issue 19: a hint in practice mode):
+ * each label of the section reading (`labels`: id, lateral and depth of
+ * the lumen's centre in m, its half-width and half-height) outlined and
+ * named, on an image `width` (m) wide and `depth` (m) deep drawn `w` × `h`
+ * pixels. Veins in blue, arteries in red, as on a colour Doppler screen.
+ */
+export function drawVesselNames(ctx, w, h, labels, width, depth) {
+  if (!labels || !(width > 0) || !(depth > 0)) return;
+  const sx = w / width, sy = h / depth;
+  ctx.save();
+  ctx.font = `${Math.max(10, Math.round(h / 26))}px system-ui, sans-serif`;
+  ctx.textAlign = 'center'; ctx.textBaseline = 'bottom';
+  ctx.lineWidth = 1.5; ctx.setLineDash([4, 3]);
+  for (const l of labels) {
+    if (!l || !l.id) continue;
+    const x = (l.lateral + width / 2) * sx, y = l.depth * sy;
+    const rx = Math.max(l.radii[0] * sx, 3), ry = Math.max(l.radii[1] * sy, 3);
+    const colour = /a$/.test(l.id) ? '#ff6b6b' : '#6bb6ff';
+    ctx.strokeStyle = colour; ctx.fillStyle = colour;
+    ctx.beginPath(); ctx.ellipse(x, y, rx, ry, 0, 0, 2 * Math.PI); ctx.stroke();
+    ctx.fillText(VESSEL_NAMES[l.id] || l.id.toUpperCase(), x, y - ry - 2);
+  }
+  ctx.restore();
+}
+
 /** The force the trainee would feel, against the device limit. */
 /**
  * The force gauge (issue 19): the felt force as the bar, the tissue force as

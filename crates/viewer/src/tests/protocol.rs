@@ -202,6 +202,7 @@ fn sanitized_zeroes_every_non_finite_number_and_keeps_the_rest() {
             time: f64::NEG_INFINITY,
             image_depth: 0.060,
             target_band: [f64::NAN, 30.0],
+            labels: Default::default(),
         }),
     };
     let expected = LiveStatus {
@@ -233,6 +234,7 @@ fn sanitized_zeroes_every_non_finite_number_and_keeps_the_rest() {
             time: 0.0,
             image_depth: 0.060,
             target_band: [0.0, 30.0],
+            labels: Default::default(),
         }),
     };
     assert_eq!(status.sanitized(), expected);
@@ -255,6 +257,7 @@ fn the_state_carries_the_section_reading() {
         time: 3.5,
         image_depth: 0.060,
         target_band: [9.5, 28.0],
+        labels: Default::default(),
     });
     let state = ViewState::from_snapshot(&snap, None, None);
     let j = serde_json::to_value(ServerMessage::State(state)).unwrap();
