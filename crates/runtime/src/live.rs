@@ -38,6 +38,31 @@ pub struct LiveMesh {
 /// vein's dark-pixel ratio 0.03 at 10 N, `tests/case_compression.rs`).
 pub const COAPTED_RATIO: f64 = 0.10;
 
+/// What scheduling the haptic thread got.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[repr(u8)]
+pub enum HapticPriority {
+    /// Not raised (or not started yet).
+    #[default]
+    Normal = 0,
+    /// The highest time-sharing priority (real-time was refused).
+    Raised = 1,
+    /// Real-time, first-in first-out.
+    Realtime = 2,
+}
+
+impl HapticPriority {
+    /// The priority of code `c` (`self as u8`); unknown codes are `Normal`.
+    pub fn from_code(c: u8) -> HapticPriority {
+        match c {
+            2 => HapticPriority::Realtime,
+            1 => HapticPriority::Raised,
+            _ => HapticPriority::Normal,
+        }
+    }
+}
+
 /// Most vessels named on the image ([`SectionReading::labels`]).
 pub const MAX_LABELS: usize = 8;
 
@@ -148,6 +173,10 @@ pub struct LiveStatus {
     pub haptic_rate: f64,
     /// Haptic ticks that missed their deadline since start.
     pub missed_deadlines: u64,
+    /// The haptic thread's scheduling (issue 19: real-time priority where
+    /// permitted).
+    #[serde(default)]
+    pub haptic_priority: HapticPriority,
     /// Age of the buffer model (s).
     pub model_age: f64,
     /// Coupling mode.
@@ -194,6 +223,7 @@ impl LiveStatus {
             level_s,
             level,
             section,
+            haptic_priority,
         } = *self;
         LiveStatus {
             time: finite(time),
@@ -215,6 +245,7 @@ impl LiveStatus {
             level_s: finite(level_s),
             level,
             section: section.map(|r| r.sanitized()),
+            haptic_priority,
         }
     }
 }

@@ -155,7 +155,7 @@ pub(super) fn spawn(
     std::thread::Builder::new()
         .name("haptic-loop".into())
         .spawn(move || {
-            super::session::raise_priority();
+            super::session::raise_priority(&shared);
             let mut ended: Option<Result<u32>> = None;
             runner.run(&stop, None, |_, _| {
                 if ended.is_some() {

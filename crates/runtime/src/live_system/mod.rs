@@ -250,6 +250,7 @@ impl LiveSystem {
             haptic: Mutex::new(None),
             section: Mutex::new(None),
             watchers: AtomicUsize::new(0),
+            haptic_priority: AtomicU8::new(0),
             fault: Mutex::new(None),
             device: Mutex::new(None),
         });
@@ -531,6 +532,9 @@ impl LiveControl for LiveSystem {
                 };
             }
         }
+        out.status.haptic_priority = crate::live::HapticPriority::from_code(
+            self.shared.haptic_priority.load(Ordering::Relaxed),
+        );
         out.haptic_device = self.device_status();
         if out.status.mode == Some(CouplingMode::Direct) {
             // The physics steps in the haptic loop: its achieved rate is the

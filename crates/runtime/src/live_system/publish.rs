@@ -398,6 +398,7 @@ mod tests {
             section: Mutex::new(None),
             device: Mutex::new(None),
             watchers: AtomicUsize::new(1),
+            haptic_priority: AtomicU8::new(0),
             fault: Mutex::new(None),
         });
         // An image of no rows: the scenario loader refuses it, so it is set

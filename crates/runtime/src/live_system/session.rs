@@ -12,6 +12,7 @@ use super::route::{HandRoute, RouteFollower};
 use super::shared::{HandTarget, HapticStatus, Shared};
 use crate::haptic_side::{haptic_side_for, SampleSink};
 use crate::live::CouplingMode;
+use crate::live::HapticPriority;
 use crate::physics_loop::{physics_loop_with, Clock};
 use crate::physics_side::PhysicsSide;
 use crate::scenario::Scenario;
@@ -261,7 +262,7 @@ pub(super) fn start_session(
     let haptic = std::thread::Builder::new()
         .name("haptic-loop".into())
         .spawn(move || {
-            raise_priority();
+            raise_priority(&sh);
             let mut follower = RouteFollower::new(HandRoute::to(target));
             runner.run(&st, None, |_, _| {
                 let now = clock.now();
@@ -308,11 +309,62 @@ pub(super) fn start_session(
 /// Not a real-time FIFO policy: the loop's sleeper spins its last ~100 µs,
 /// and a FIFO thread spinning would starve the physics thread. Failure is
 /// logged, not fatal.
-pub(super) fn raise_priority() {
+pub(super) fn raise_priority(shared: &Shared) {
+    let got = haptic_priority();
+    shared
+        .haptic_priority
+        .store(got as u8, std::sync::atomic::Ordering::Relaxed);
+    match got {
+        HapticPriority::Realtime => {
+            tracing::info!("haptic loop at real-time priority (SCHED_FIFO {REALTIME_PRIORITY})")
+        }
+        HapticPriority::Raised => tracing::info!(
+            "haptic loop at the highest time-sharing priority (real-time was refused: without CAP_SYS_NICE or an rtprio limit)"
+        ),
+        HapticPriority::Normal => {
+            tracing::warn!("haptic loop at normal priority (raising it was refused)")
+        }
+    }
+}
+
+/// The real-time priority asked for the haptic thread (1–99 on Linux):
+/// above the default of threaded IRQ handlers' neighbours (50) is not
+/// needed; the browser and the physics run at time-sharing priorities,
+/// which any real-time priority preempts.
+const REALTIME_PRIORITY: u8 = 40;
+
+/// Puts the calling (haptic) thread at real-time priority (FIFO) where
+/// permitted (issue 19: "the simulation keeps its rates under load",
+/// "real-time priority ... where permitted"), else at the highest
+/// time-sharing priority, else leaves it; says which it got. With FIFO the
+/// browser's work cannot delay the tick on any core: the thread preempts
+/// every time-shared thread, and it sleeps between ticks (the runner's
+/// spin is its last ~0.1 ms), so it does not starve the rest.
+fn haptic_priority() -> HapticPriority {
+    #[cfg(unix)]
+    {
+        use thread_priority::unix::{
+            set_thread_priority_and_policy, thread_native_id, RealtimeThreadSchedulePolicy,
+            ThreadSchedulePolicy,
+        };
+        use thread_priority::{ThreadPriority, ThreadPriorityValue};
+        if let Ok(v) = ThreadPriorityValue::try_from(REALTIME_PRIORITY) {
+            let fifo = ThreadSchedulePolicy::Realtime(RealtimeThreadSchedulePolicy::Fifo);
+            if set_thread_priority_and_policy(
+                thread_native_id(),
+                ThreadPriority::Crossplatform(v),
+                fifo,
+            )
+            .is_ok()
+            {
+                return HapticPriority::Realtime;
+            }
+        }
+    }
     use thread_priority::{set_current_thread_priority, ThreadPriority};
     match set_current_thread_priority(ThreadPriority::Max) {
-        Ok(()) => tracing::info!("haptic loop at the highest time-sharing priority"),
-        Err(e) => tracing::warn!("haptic loop at normal priority (raising it was refused: {e:?})"),
+        Ok(()) => HapticPriority::Raised,
+        Err(_) => HapticPriority::Normal,
     }
 }
 

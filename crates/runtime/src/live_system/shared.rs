@@ -92,6 +92,8 @@ pub(super) struct Shared {
     pub section: Mutex<Option<triple_buffer::Output<Option<SectionReading>>>>,
     /// Pages looking at the live state (the imaging thread idles at 0).
     pub watchers: AtomicUsize,
+    /// The haptic thread's scheduling ([`HapticPriority`] as `u8`).
+    pub haptic_priority: AtomicU8,
     /// The last error of a thread of the live system, for the page; cleared
     /// when a new session starts.
     pub fault: Mutex<Option<String>>,

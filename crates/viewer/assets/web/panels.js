@@ -250,7 +250,9 @@ const LEVEL_NAMES = {
 export function showStatus(s, fps) {
   const set = (id, text) => { document.getElementById(id).textContent = text; };
   set('st-physics', `${s.physics_rate.toFixed(0)} Hz (set ${s.physics_rate_setting.toFixed(0)})`);
-  set('st-haptic', `${s.haptic_rate.toFixed(0)} Hz`);
+  // The haptic thread's scheduling (issue 19): real-time where permitted.
+  const prio = { realtime: 'real-time priority', raised: 'raised priority (real-time refused)', normal: 'normal priority' };
+  set('st-haptic', `${s.haptic_rate.toFixed(0)} Hz, ${prio[s.haptic_priority] ?? s.haptic_priority}`);
   set('st-missed', `${s.missed_deadlines}`);
   set('st-age', `${(s.model_age * 1000).toFixed(1)} ms`);
   set('st-mode', `${s.mode ?? '–'}${s.latency_setting > 0 ? ` +${(s.latency_setting * 1000).toFixed(0)} ms` : ''}`);
