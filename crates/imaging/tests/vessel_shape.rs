@@ -97,7 +97,10 @@ fn vein_is_oval_at_rest_and_artery_round() {
     let (vw, vh) = dark_extent(&cfg, &frame, &l.vein, a.vein().half_width()).unwrap();
     let (aw, ah) = dark_extent(&cfg, &frame, &l.artery, a.artery().half_width()).unwrap();
     assert!(vw / vh >= 1.15, "rest vein on the image {vw} × {vh} m");
-    assert!((aw / ah - 1.0).abs() < 0.15, "rest artery on the image {aw} × {ah} m");
+    assert!(
+        (aw / ah - 1.0).abs() < 0.15,
+        "rest artery on the image {aw} × {ah} m"
+    );
 }
 
 #[test]
@@ -129,7 +132,10 @@ fn compressed_vein_flattens_about_its_axis_and_keeps_its_width() {
         let bone = r.anatomy().unwrap().femur_top();
         let v = r.anatomy().unwrap().vein();
         let axis = v.depth + s * (1.0 - v.depth / bone) - s;
-        assert!((l.vein.depth - axis).abs() < 1e-9, "centre off the axis at {f} N");
+        assert!(
+            (l.vein.depth - axis).abs() < 1e-9,
+            "centre off the axis at {f} N"
+        );
         // On the pixels, while the lumen is taller than the blur (c ≥ 0.3:
         // 2.6 mm of a 8.8 mm rest height): the width stays ≥ 80 % of
         // rest and the aspect rises, up to one pixel of quantisation on
@@ -140,7 +146,10 @@ fn compressed_vein_flattens_about_its_axis_and_keeps_its_width() {
             let (w, h) = dark_extent(&cfg, &frame, &l.vein, rest_half).unwrap();
             assert!(w >= 0.8 * w0, "width {w} m at {f} N, rest {w0} m");
             let ap = w / h;
-            assert!(ap >= 0.92 * last_pixels, "image aspect falls at {f} N: {ap}");
+            assert!(
+                ap >= 0.92 * last_pixels,
+                "image aspect falls at {f} N: {ap}"
+            );
             last_pixels = ap;
             measured += 1;
             if c <= 0.5 {
@@ -200,10 +209,13 @@ fn artery_stays_round_below_its_cue_then_ovalises() {
             // On the image: within 10 % of its rest aspect (the bound of
             // the issue; the same blur at the same threshold applies to
             // both frames, and ±1 pixel of 7 mm on each side is ±2 %).
-            if f as usize % 5 == 0 {
+            if f.rem_euclid(5.0) == 0.0 {
                 let (w, h) = dark_extent(&cfg, &frame, &l.artery, rest_half).unwrap();
                 let rel = (w / h) / (w0 / h0);
-                assert!((rel - 1.0).abs() < 0.1, "artery on the image at {f} N: {rel}");
+                assert!(
+                    (rel - 1.0).abs() < 0.1,
+                    "artery on the image at {f} N: {rel}"
+                );
             }
         } else if a > 1.1 {
             ovalised = true;
