@@ -80,7 +80,10 @@ impl VesselWarp {
         let shift = (1.0 - ratio) * h;
         let least = 1.5 * (-shift).max(0.0);
         let b = vessel.half_height();
-        let above = (2.0 * b).min(0.8 * (centre - h - wall)).max(least).max(1e-4);
+        let above = (2.0 * b)
+            .min(0.8 * (centre - h - wall))
+            .max(least)
+            .max(1e-4);
         let below = (2.0 * b).max(least);
         VesselWarp {
             centre,
@@ -243,7 +246,10 @@ mod tests {
             let mut last = f64::NEG_INFINITY;
             for i in 0..4000 {
                 let y = f.apply(0.015 + i as f64 * 1e-5);
-                assert!(y >= last - 1e-15, "floored map not monotone for c = {ratio}");
+                assert!(
+                    y >= last - 1e-15,
+                    "floored map not monotone for c = {ratio}"
+                );
                 last = y;
             }
         }
