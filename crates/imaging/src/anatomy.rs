@@ -59,6 +59,22 @@ impl Vessel {
         }
     }
 
+    /// An upright oval vessel with the area of the circle of radius
+    /// `radius` (m) and width/height `aspect`: semi-axes `r √A` across and
+    /// `r / √A` in depth (`π a b = π r²`, so the lumen laws' areas keep
+    /// their meaning).
+    pub fn oval(lateral: f64, depth: f64, radius: f64, aspect: f64, wall: f64) -> Self {
+        let k = aspect.max(1e-3).sqrt();
+        Vessel {
+            lateral,
+            depth,
+            radius: radius * k,
+            radius_b: radius / k,
+            angle: 0.0,
+            wall,
+        }
+    }
+
     /// The vertical chord of the ellipse grown by `grow` (m) in the column
     /// `u`: `(centre depth, half-height)` (m), half-height 0 outside.
     /// With `(ξ, ζ)` the ellipse axes, `ξ²/a² + ζ²/b² ≤ 1` is, along the
@@ -200,6 +216,20 @@ fn in_wall(sv: &SectionVessel, u: f64, depth: f64) -> bool {
     v.contains(u, depth, wall)
 }
 
+/// Width over height of a patent vein's lumen at rest, supine (an
+/// **estimate**, not a measured value: the fidelity review (row 30) notes
+/// only that a real vein is oval, not round, at rest; at a venous pressure
+/// of ~10 mmHg a thin-walled vein is partly collapsed, and transverse CFV/FV
+/// images show width/height ≈ 1.2–1.5; 1.3 is taken).
+pub const VEIN_REST_ASPECT: f64 = 1.3;
+
+/// Rest aspect of a vein whose lumen holds content over `fill` of its area:
+/// `1 + (A − 1)(1 − fill)`, [`VEIN_REST_ASPECT`] when patent and round when
+/// filled (a thrombus distends the vein into a round tube).
+pub fn rest_aspect(fill: f64) -> f64 {
+    1.0 + (VEIN_REST_ASPECT - 1.0) * (1.0 - fill.clamp(0.0, 1.0))
+}
+
 /// Smooth step `3t² − 2t³` of `t` clamped to [0, 1].
 fn smoothstep(t: f64) -> f64 {
     let t = t.clamp(0.0, 1.0);
@@ -215,10 +245,11 @@ impl Anatomy {
     pub fn new(cfg: &AnatomyConfig, state: VeinState) -> Result<Self, ImagingError> {
         cfg.validate("imaging.anatomy")?;
         let vc = cfg.studied_condition(state);
-        let vein = Vessel::circle(
+        let vein = Vessel::oval(
             cfg.vein_lateral,
             cfg.vein_depth,
             0.5 * cfg.vein_diameter * vc.diameter_factor,
+            rest_aspect(vc.fill),
             vc.wall_thickness,
         );
         let artery = Vessel::circle(
@@ -596,6 +627,21 @@ mod tests {
         }
         let acute = anatomy(VeinState::Acute);
         assert!(acute.vein().radius > h.vein().radius);
+    }
+
+    #[test]
+    fn patent_vein_is_oval_filled_vein_and_artery_round() {
+        let h = anatomy(VeinState::Healthy);
+        let v = h.vein();
+        let aspect = v.half_width() / v.half_height();
+        assert!((aspect - VEIN_REST_ASPECT).abs() < 1e-12);
+        // The area is that of the configured diameter's circle.
+        let r = 0.5 * h.config().vein_diameter;
+        assert!((v.rest_area() - PI * r * r).abs() < 1e-15);
+        let a = h.artery();
+        assert_eq!(a.half_width(), a.half_height());
+        let acute = anatomy(VeinState::Acute);
+        assert_eq!(acute.vein().half_width(), acute.vein().half_height());
     }
 
     #[test]

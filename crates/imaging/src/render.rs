@@ -394,7 +394,7 @@ impl Renderer {
         let warp = VesselWarp::new(v, v.lateral, compensated_ratio(ratio, s, def.bone_depth));
         let (c, h) = v.chord(v.lateral, 0.0);
         let top = column_depth(s, def.bone_depth, warp.apply(c - h)) - face;
-        let bottom = column_depth(s, def.bone_depth, c + h) - face;
+        let bottom = column_depth(s, def.bone_depth, warp.apply(c + h)) - face;
         Lumen {
             area: ratio * v.rest_area(),
             rest_area: v.rest_area(),
@@ -506,7 +506,8 @@ impl Renderer {
             if let Some(a) = &self.anatomy {
                 for (sv, &r) in a.vessels().iter().zip(&ratios[..n]) {
                     let mut w =
-                        VesselWarp::new(&sv.vessel, u, compensated_ratio(r, s, def.bone_depth));
+                        VesselWarp::new(&sv.vessel, u, compensated_ratio(r, s, def.bone_depth))
+                            .with_floor(a.femur_top());
                     if let Some(c) = sv.condition() {
                         // A floating tail sways with breathing (issue 13).
                         w = w.with_tail(c.fill, c.tail_shift(input.time));

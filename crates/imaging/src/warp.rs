@@ -1,18 +1,38 @@
 //! The collapse (or pulsation) of a vessel, superposed on the column
 //! compression of [`crate::deformation`].
 //!
-//! In the column `u`, let `h` be the half-height of the rest lumen, `η` the
-//! depth relative to the vessel's centre and `c` the lumen ratio (area and
-//! height relative to rest). The lower wall stays on its bed; the lumen
-//! shrinks towards it, `η ↦ h − c (h − η)` for `|η| ≤ h`; the tissue above
-//! follows, shifted down by `k = 2 (1 − c) h` at the upper wall and by a
-//! linearly decaying amount up to a distance `L` above it:
-//! `η ↦ η + k (1 − x/L)` with `x = −h − η ∈ [0, L]`. The map is continuous
-//! and increasing (its slope `1 + k/L` is positive for `L > 2 (c − 1) h`, true
-//! for the pulsation), leaves the tissue below the vessel and above `L` in
-//! place, so the skin keeps the physics' displacement, and carries the
-//! scatterers and the walls with the lumen: a collapsed healthy vein shows
-//! its two walls meeting in a bright line.
+//! In the column `u`, let `h` be the half-height of the rest lumen's chord,
+//! `η` the depth relative to the chord's centre and `c` the warp ratio (the
+//! lumen's height, hence area, relative to rest). The lumen flattens about
+//! its own axis, `η ↦ c η` for `|η| ≤ h`: in every column the chord keeps
+//! its centre and scales by the same `c`, so a rest ellipse of semi-axes
+//! `(a, b)` becomes the ellipse `(a, c b)` — a lens, then at `c = 0` a line
+//! where the two walls meet. The walls (thickness `t` in the column: the
+//! wall-grown chord's half-height minus `h`) move rigidly with the lumen's
+//! edges, each by `k = (1 − c) h` towards the axis, so they keep their
+//! scatterer density and the coapted walls stay a bright line; the tissue
+//! beyond follows, the shift decaying linearly to 0 over `L` above the
+//! upper wall and `L_b` below the lower one:
+//! `η ↦ η + k (1 − max(x − t, 0)/L)` above (`x = −h − η ∈ [0, t + L]`),
+//! `η ↦ η − k (1 − max(x − t, 0)/L_b)` below (`x = η − h ∈ [0, t + L_b]`).
+//! The map is continuous (`±h ↦ ±c h` from both sides), increasing (slope
+//! `c ≥ 0` inside, 1 in the walls, `1 + k/L` and `1 + k/L_b` beyond,
+//! positive while `L`, `L_b > (c − 1) h`, enforced for an expanding lumen)
+//! and the identity beyond `t + L` and `t + L_b`, so the skin keeps the
+//! physics' displacement, the femur below [`VesselWarp::with_floor`] stays
+//! where the column puts it, and the scatterers (fixed in tissue
+//! coordinates) are carried, not torn. The tissue stretched by `1 + k/L`
+//! echoes `10 log10(1 + k/L)` dB less (fewer scatterers per pixel): with
+//! `L = 2 b` above, at most 1.5 dB for a closed vein (the old map, which
+//! moved the upper wall by `2k` over `1.5 b`, stretched by up to 2.3, 3.7
+//! dB, and the upper wall with it).
+//!
+//! The warp is vertical only (the scatterers are binned by column), so the
+//! lumen keeps its rest width in the image until the walls meet. A tube
+//! whose wall keeps its length (perimeter `P = 2π r` for a circle of radius
+//! `r`) would widen as it flattens: a line of half-width `a` has perimeter
+//! `4a`, so `a → π r / 2 ≈ 1.57 r`. Drawing that needs lateral motion of
+//! the scatterers across columns and is left out.
 
 use crate::anatomy::Vessel;
 
@@ -32,8 +52,14 @@ pub struct VesselWarp {
     centre: f64,
     half_height: f64,
     ratio: f64,
+    /// Shift of each wall towards the axis, `k = (1 − c) h` (m).
     shift: f64,
+    /// Decay length above the upper wall, `L` (m).
     decay: f64,
+    /// Decay length below the lower wall, `L_b` (m).
+    decay_below: f64,
+    /// Wall thickness in this column, `t` (m): moves rigidly.
+    wall: f64,
     lo: f64,
     hi: f64,
     /// Half-height of a central content band (m; 0: none).
@@ -44,22 +70,47 @@ pub struct VesselWarp {
 
 impl VesselWarp {
     /// The warp of `vessel` in the column `u` with lumen ratio `ratio`; the
-    /// tissue above follows over `1.5` radii (or `1.5 |k|` if the lumen expands and that is larger, which
-    /// keeps the map increasing).
+    /// tissue around follows over `L = 2 b` above (`b` the vessel's
+    /// half-height; at most 0.8 of the depth of its outer top, so the skin
+    /// stays) and `L_b = 2 b` below, each at least `1.5 |k|` if the lumen
+    /// expands, which keeps the map increasing (slope ≥ 1/3).
     pub fn new(vessel: &Vessel, u: f64, ratio: f64) -> Self {
         let (centre, h) = vessel.chord(u, 0.0);
-        let decay = (1.5 * vessel.half_height()).max(3.0 * (ratio - 1.0) * h);
+        let wall = (vessel.chord(u, vessel.wall).1 - h).max(0.0);
+        let shift = (1.0 - ratio) * h;
+        let least = 1.5 * (-shift).max(0.0);
+        let b = vessel.half_height();
+        let above = (2.0 * b)
+            .min(0.8 * (centre - h - wall))
+            .max(least)
+            .max(1e-4);
+        let below = (2.0 * b).max(least);
         VesselWarp {
             centre,
             half_height: h,
             ratio,
-            shift: 2.0 * (1.0 - ratio) * h,
-            decay,
-            lo: centre - h - decay,
-            hi: centre + h,
+            shift,
+            decay: above,
+            decay_below: below,
+            wall,
+            lo: centre - h - wall - above,
+            hi: centre + h + wall + below,
             band: 0.0,
             band_shift: 0.0,
         }
+    }
+
+    /// This warp with the tissue below the vessel held from depth `floor`
+    /// (m) down (the femur's top: bone does not follow a vein's collapse).
+    /// The lower decay ends at `floor` (a collapsing lumen, `k > 0`, keeps
+    /// the slope `1 + k/L_b > 1` for any `L_b`), but stays at least
+    /// `1.5 |k|` for an expanding one (slope ≥ 1/3) and at least 0.1 mm.
+    pub fn with_floor(mut self, floor: f64) -> Self {
+        let outer = self.centre + self.half_height + self.wall;
+        let room = (floor - outer).max(1.5 * (-self.shift).max(0.0)).max(1e-4);
+        self.decay_below = self.decay_below.min(room);
+        self.hi = outer + self.decay_below;
+        self
     }
 
     /// This warp with a central content band of `fill` of the chord (a
@@ -102,20 +153,23 @@ impl VesselWarp {
     /// The warped depth (m) of the tissue point at depth `depth` (m).
     #[inline]
     pub fn apply(&self, depth: f64) -> f64 {
-        if depth <= self.lo || depth > self.hi || self.half_height <= 0.0 {
+        if depth <= self.lo || depth >= self.hi || self.half_height <= 0.0 {
             return depth;
         }
         let h = self.half_height;
         let mut eta = depth - self.centre;
-        if self.band_shift != 0.0 && eta.abs() <= h {
+        if eta < -h {
+            let x = (-h - eta - self.wall).max(0.0);
+            return depth + self.shift * (1.0 - x / self.decay);
+        }
+        if eta > h {
+            let x = (eta - h - self.wall).max(0.0);
+            return depth - self.shift * (1.0 - x / self.decay_below);
+        }
+        if self.band_shift != 0.0 {
             eta = self.tail_map(eta);
         }
-        if eta >= -h {
-            self.centre + h - self.ratio * (h - eta)
-        } else {
-            let x = -h - eta;
-            depth + self.shift * (1.0 - x / self.decay)
-        }
+        self.centre + self.ratio * eta
     }
 }
 
@@ -179,9 +233,24 @@ mod tests {
                 }
                 last = y;
             }
-            assert_eq!(w.apply(0.04), 0.04);
             if ratio <= 1.6 {
-                assert_eq!(w.apply(0.015), 0.015);
+                // Beyond 2 radii above and below the walls nothing moves.
+                assert_eq!(w.apply(0.0144), 0.0144);
+                assert_eq!(w.apply(0.0456), 0.0456);
+            }
+            // Held from the floor down while the lumen does not expand.
+            let f = w.with_floor(0.038);
+            if ratio <= 1.0 {
+                assert_eq!(f.apply(0.038), 0.038);
+            }
+            let mut last = f64::NEG_INFINITY;
+            for i in 0..4000 {
+                let y = f.apply(0.015 + i as f64 * 1e-5);
+                assert!(
+                    y >= last - 1e-15,
+                    "floored map not monotone for c = {ratio}"
+                );
+                last = y;
             }
         }
     }
@@ -211,13 +280,31 @@ mod tests {
     }
 
     #[test]
-    fn lumen_height_scales_by_the_ratio() {
-        let v = vessel();
-        let w = VesselWarp::new(&v, 0.0, 0.25);
-        let top = w.apply(v.depth - v.radius);
-        let bottom = w.apply(v.depth + v.radius);
-        assert!((bottom - (v.depth + v.radius)).abs() < 1e-15);
-        assert!(((bottom - top) - 0.25 * 2.0 * v.radius).abs() < 1e-12);
+    fn lumen_flattens_about_its_axis_into_an_ellipse() {
+        // An oval vein, 1.3 times wider than tall.
+        let mut v = vessel();
+        v.radius = 0.0057;
+        v.radius_b = 0.0044;
+        for c in [0.0, 0.25, 0.7, 1.2] {
+            for u in [0.0, 0.002, 0.004, 0.0055] {
+                let (centre, h) = v.chord(u, 0.0);
+                let w = VesselWarp::new(&v, u, c);
+                let (top, bottom) = (w.apply(centre - h), w.apply(centre + h));
+                // Centred on the axis, of height c times the chord's: the
+                // ellipse of semi-axes (a, c b).
+                assert!((0.5 * (top + bottom) - v.depth).abs() < 1e-15);
+                assert!(((bottom - top) - 2.0 * c * h).abs() < 1e-15);
+                // The walls move rigidly, each by (1 − c) h towards the axis.
+                let t = v.chord(u, v.wall).1 - h;
+                let k = (1.0 - c) * h;
+                for d in [centre - h - t, centre - h - 0.5 * t] {
+                    assert!((w.apply(d) - (d + k)).abs() < 1e-15);
+                }
+                for d in [centre + h + t, centre + h + 0.5 * t] {
+                    assert!((w.apply(d) - (d - k)).abs() < 1e-15);
+                }
+            }
+        }
         // Outside the vessel's width nothing moves.
         let w = VesselWarp::new(&v, 0.006, 0.0);
         assert!(!w.is_active());

@@ -93,7 +93,8 @@ fn content_fills_its_fraction_of_the_lumen() {
             }
         }
         // Echoes: blood at the healthy content's, thrombus at the condition's.
-        let (top, bottom) = (v.depth - 0.9 * v.radius, v.depth + 0.9 * v.radius);
+        // (0.9 of the vertical semi-axis: a partly filled vein is oval.)
+        let (top, bottom) = (v.depth - 0.9 * v.radius_b, v.depth + 0.9 * v.radius_b);
         let probe = if layout == ContentLayout::Mural {
             bottom
         } else {

@@ -109,14 +109,17 @@ fn acute_thrombus_mostly_looks_like_blood_at_rest() {
         total += 1;
         close += usize::from(diff_db.abs() <= 6.0);
         // Speckle elsewhere unchanged.
-        let mut changed: Vec<(f64, f64)> = vec![(
-            rt.anatomy().unwrap().vein().lateral,
-            rt.anatomy().unwrap().vein().half_width(),
-        )];
-        for (k, st) in with.anatomy.structures.iter().enumerate() {
-            if st.condition.is_some() {
-                let v = rt.anatomy().unwrap().vessels()[k + 2].vessel;
-                changed.push((v.lateral, v.half_width()));
+        // The columns through each such vein as drawn in either frame: a
+        // patent vein is oval at rest, wider than the round filled one.
+        let mut changed: Vec<(f64, f64)> = Vec::new();
+        for r in [&rt, &rh] {
+            let a = r.anatomy().unwrap();
+            changed.push((a.vein().lateral, a.vein().half_width()));
+            for (k, st) in with.anatomy.structures.iter().enumerate() {
+                if st.condition.is_some() {
+                    let v = a.vessels()[k + 2].vessel;
+                    changed.push((v.lateral, v.half_width()));
+                }
             }
         }
         let (cols, rows) = rt.frame_size();

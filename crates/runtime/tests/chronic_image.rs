@@ -187,10 +187,13 @@ fn chronic_segment_is_contracted() {
         let healthy = config(a, None, StructureId::Fv, s);
         let r = Renderer::new(&cfg, VeinState::Healthy).unwrap();
         let rh = Renderer::new(&healthy, VeinState::Healthy).unwrap();
-        (
-            r.anatomy().unwrap().vein().radius,
-            rh.anatomy().unwrap().vein().radius,
-        )
+        // The radius of the circle of the lumen's area, √(a b): a patent
+        // vein is oval at rest, a filled one round.
+        let eq = |r: &Renderer| {
+            let v = r.anatomy().unwrap().vein();
+            (v.radius * v.radius_b).sqrt()
+        };
+        (eq(&r), eq(&rh))
     };
     let (inside, inside_healthy) = at(CHRONIC_S);
     let (outside, outside_healthy) = at(0.09);
