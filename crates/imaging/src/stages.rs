@@ -4,7 +4,7 @@
 
 use crate::anatomy::{Anatomy, MAX_BREAKPOINTS};
 use crate::deformation::column_depth;
-use crate::psf::{safe_log2, PsfTables, BLOCK_ROWS, PHASE_STEPS};
+use crate::psf::{safe_log2, PsfTables, PHASE_STEPS};
 use crate::pulse::AXIAL_SUBSTEPS;
 use crate::warp::WarpSet;
 
@@ -35,6 +35,7 @@ pub(crate) fn image_depth(g: &FrameGeometry, surface: f64, warps: &WarpSet, dept
 /// `out` (`rows + 2·pad` complex samples, cleared first), weighted by the
 /// elevation weight `elev` of its splat row (`row + pad`).
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub(crate) fn splat_column(
     t: &PsfTables,
     g: &FrameGeometry,
@@ -90,7 +91,10 @@ pub(crate) fn splat_column(
 /// Output column `j` of the lateral convolution with the depth-dependent
 /// lateral profile: `out[i] = Σ_k h_i[k] rf[j + H + k][i]` over the padded
 /// bins (`H` the halo), unpadded rows, each block of rows over its own
-/// half-width.
+/// half-width. Offsets run outermost, each over the long row runs that
+/// reach it ([`PsfTables::lat_runs`]), so each row still sums its terms
+/// in increasing `k` (the same floats as a row-by-row sum).
+#[inline(always)]
 pub(crate) fn convolve_column(
     t: &PsfTables,
     rf: &[[f32; 2]],
@@ -102,17 +106,14 @@ pub(crate) fn convolve_column(
     out.fill([0.0, 0.0]);
     let rows = out.len();
     let hh = t.lat_half as i64;
-    for (blk, chunk) in out.chunks_mut(BLOCK_ROWS).enumerate() {
-        let h = t.block_half[blk] as i64;
-        let i0 = blk * BLOCK_ROWS;
-        let n = chunk.len();
-        for k in -h..=h {
-            let w = &t.lateral[(k + hh) as usize * rows + i0..][..n];
-            let start = (j as i64 + hh + k) as usize * padded_rows + pad + i0;
-            let src = &rf[start..start + n];
-            for ((o, s), &wk) in chunk.iter_mut().zip(src).zip(w) {
-                o[0] += wk * s[0];
-                o[1] += wk * s[1];
+    for k in -hh..=hh {
+        let wk = &t.lateral[(k + hh) as usize * rows..][..rows];
+        let col = (j as i64 + hh + k) as usize * padded_rows + pad;
+        let src = &rf[col..col + rows];
+        for &(i0, i1) in &t.lat_runs[k.unsigned_abs() as usize] {
+            for ((o, s), &w) in out[i0..i1].iter_mut().zip(&src[i0..i1]).zip(&wk[i0..i1]) {
+                o[0] += w * s[0];
+                o[1] += w * s[1];
             }
         }
     }
@@ -159,6 +160,7 @@ pub(crate) struct LogCompression {
 /// attenuates ≈ 30 times more than soft tissue, which makes its shadow;
 /// blood ≈ 4 times less, which makes the enhancement below the vessels.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub(crate) fn compress_column(
     lc: &LogCompression,
     g: &FrameGeometry,
