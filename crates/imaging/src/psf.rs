@@ -30,11 +30,8 @@ pub(crate) struct PsfTables {
     pub axial: AxialTables,
     /// Largest lateral half-width (taps), the halo of the scatterer field.
     pub lat_half: usize,
-    /// `lat_runs[|k|]`: the maximal row ranges `i0..i1` whose blocks of
-    /// `BLOCK_ROWS` rows reach lateral offset `±k` (the block's half-width,
-    /// the widest support of its rows, is at least `|k|`), so that the lateral
-    /// convolution runs each offset over long contiguous rows.
-    pub lat_runs: Vec<Vec<(usize, usize)>>,
+    /// Lateral half-width of each block of `BLOCK_ROWS` rows.
+    pub block_half: Vec<usize>,
     /// `lateral[(k + lat_half) · rows + i]`: lateral weight at offset `k`
     /// columns for image row `i` (zero past the row's support).
     pub lateral: Vec<f32>,
@@ -129,22 +126,6 @@ impl PsfTables {
             .map(|b| b.iter().copied().max().unwrap_or(0).max(1))
             .collect();
         let lat_half = block_half.iter().copied().max().unwrap_or(1);
-        let lat_runs = (0..=lat_half)
-            .map(|k| {
-                let mut runs: Vec<(usize, usize)> = Vec::new();
-                for (b, &h) in block_half.iter().enumerate() {
-                    if h < k {
-                        continue;
-                    }
-                    let (i0, i1) = (b * BLOCK_ROWS, ((b + 1) * BLOCK_ROWS).min(rows));
-                    match runs.last_mut() {
-                        Some(last) if last.1 == i0 => last.1 = i1,
-                        _ => runs.push((i0, i1)),
-                    }
-                }
-                runs
-            })
-            .collect();
         let mut lateral = vec![0.0f32; (2 * lat_half + 1) * rows];
         for (i, lat) in rows_lat.iter().enumerate() {
             let h = block_half[i / BLOCK_ROWS];
@@ -193,7 +174,7 @@ impl PsfTables {
         PsfTables {
             axial,
             lat_half,
-            lat_runs,
+            block_half,
             lateral,
             elev_diffuse,
             elev_point,

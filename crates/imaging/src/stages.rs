@@ -4,7 +4,7 @@
 
 use crate::anatomy::{Anatomy, MAX_BREAKPOINTS};
 use crate::deformation::column_depth;
-use crate::psf::{safe_log2, PsfTables, PHASE_STEPS};
+use crate::psf::{safe_log2, PsfTables, BLOCK_ROWS, PHASE_STEPS};
 use crate::pulse::AXIAL_SUBSTEPS;
 use crate::warp::WarpSet;
 
@@ -91,9 +91,8 @@ pub(crate) fn splat_column(
 /// Output column `j` of the lateral convolution with the depth-dependent
 /// lateral profile: `out[i] = Σ_k h_i[k] rf[j + H + k][i]` over the padded
 /// bins (`H` the halo), unpadded rows, each block of rows over its own
-/// half-width. Offsets run outermost, each over the long row runs that
-/// reach it ([`PsfTables::lat_runs`]), so each row still sums its terms
-/// in increasing `k` (the same floats as a row-by-row sum).
+/// half-width. A full block accumulates in registers over all its offsets
+/// (`k` increasing from a zero sum, as a row-by-row sum: the same floats).
 #[inline(always)]
 pub(crate) fn convolve_column(
     t: &PsfTables,
@@ -103,17 +102,35 @@ pub(crate) fn convolve_column(
     j: usize,
     out: &mut [[f32; 2]],
 ) {
-    out.fill([0.0, 0.0]);
     let rows = out.len();
     let hh = t.lat_half as i64;
-    for k in -hh..=hh {
-        let wk = &t.lateral[(k + hh) as usize * rows..][..rows];
-        let col = (j as i64 + hh + k) as usize * padded_rows + pad;
-        let src = &rf[col..col + rows];
-        for &(i0, i1) in &t.lat_runs[k.unsigned_abs() as usize] {
-            for ((o, s), &w) in out[i0..i1].iter_mut().zip(&src[i0..i1]).zip(&wk[i0..i1]) {
-                o[0] += w * s[0];
-                o[1] += w * s[1];
+    for (blk, chunk) in out.chunks_mut(BLOCK_ROWS).enumerate() {
+        let h = t.block_half[blk] as i64;
+        let i0 = blk * BLOCK_ROWS;
+        let n = chunk.len();
+        let weights = |k: i64| &t.lateral[(k + hh) as usize * rows + i0..][..n];
+        let source = |k: i64| {
+            let start = (j as i64 + hh + k) as usize * padded_rows + pad + i0;
+            &rf[start..start + n]
+        };
+        if let Ok(block) = <&mut [[f32; 2]; BLOCK_ROWS]>::try_from(&mut *chunk) {
+            let mut acc = [[0.0f32; 2]; BLOCK_ROWS];
+            for k in -h..=h {
+                let w: &[f32; BLOCK_ROWS] = weights(k).try_into().expect("full block");
+                let s: &[[f32; 2]; BLOCK_ROWS] = source(k).try_into().expect("full block");
+                for m in 0..BLOCK_ROWS {
+                    acc[m][0] += w[m] * s[m][0];
+                    acc[m][1] += w[m] * s[m][1];
+                }
+            }
+            *block = acc;
+        } else {
+            chunk.fill([0.0, 0.0]);
+            for k in -h..=h {
+                for ((o, s), &wk) in chunk.iter_mut().zip(source(k)).zip(weights(k)) {
+                    o[0] += wk * s[0];
+                    o[1] += wk * s[1];
+                }
             }
         }
     }
