@@ -29,9 +29,10 @@ fn policy_of(name: &str) -> Option<u32> {
     None
 }
 
-#[test]
-fn the_reported_priority_is_the_kernels() {
-    let system = LiveSystem::start(Scenario::default()).unwrap();
+/// Starts the live system with `scenario` and returns the reported
+/// priority and the kernel's policy of its haptic thread.
+fn priority_of(scenario: Scenario) -> (HapticPriority, u32) {
+    let system = LiveSystem::start(scenario).unwrap();
     let mut snap = LiveSnapshot::default();
     let end = Instant::now() + Duration::from_secs(10);
     // The thread sets its priority as it starts: wait for the report.
@@ -44,6 +45,15 @@ fn the_reported_priority_is_the_kernels() {
     }
     let reported = snap.status.haptic_priority;
     let policy = policy_of("haptic-loop").expect("the haptic-loop thread");
+    system.shutdown().unwrap();
+    (reported, policy)
+}
+
+/// One test, the two systems one after the other: the thread is found by
+/// its name, which a second live system in the same process would share.
+#[test]
+fn the_reported_priority_is_the_kernels() {
+    let (reported, policy) = priority_of(Scenario::default());
     eprintln!("haptic loop: reported {reported:?}, kernel policy {policy}");
     match reported {
         HapticPriority::Realtime => assert_eq!(policy, 1, "reported real-time, not SCHED_FIFO"),
@@ -51,5 +61,12 @@ fn the_reported_priority_is_the_kernels() {
             assert_eq!(policy, 0, "reported {reported:?}, the kernel says {policy}")
         }
     }
-    system.shutdown().unwrap();
+    // Without `[haptics.runner] realtime_priority` the loop stays
+    // time-shared, and says so.
+    let mut s = Scenario::default();
+    s.haptics.runner.realtime_priority = false;
+    let (reported, policy) = priority_of(s);
+    eprintln!("not asked: reported {reported:?}, kernel policy {policy}");
+    assert_ne!(reported, HapticPriority::Realtime);
+    assert_eq!(policy, 0, "not asked for, at policy {policy}");
 }

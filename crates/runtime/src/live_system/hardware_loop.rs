@@ -143,7 +143,8 @@ impl<O: TickObserver> DeviceLoop<O> {
 /// returns the `direct` physics and the device (handed to the next session).
 /// A stopped device or a tick error is reported to the page
 /// ([`Shared::report_fault`], after the loop, off the real-time path) and
-/// stops the session.
+/// stops the session. `realtime`: the loop runner asks for real-time
+/// priority (`[haptics.runner] realtime_priority`).
 pub(super) fn spawn(
     mut device_loop: DeviceLoop<LiveObserver>,
     mut runner: LoopRunner,
@@ -151,11 +152,12 @@ pub(super) fn spawn(
     stop: Arc<AtomicBool>,
     shared: Arc<Shared>,
     name: String,
+    realtime: bool,
 ) -> Result<JoinHandle<(Option<PhysicsSide>, Driver)>> {
     std::thread::Builder::new()
         .name("haptic-loop".into())
         .spawn(move || {
-            super::session::raise_priority(&shared);
+            super::session::raise_priority(&shared, realtime);
             let mut ended: Option<Result<u32>> = None;
             runner.run(&stop, None, |_, _| {
                 if ended.is_some() {

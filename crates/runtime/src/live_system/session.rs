@@ -230,6 +230,7 @@ pub(super) fn start_session(
         scenario.haptics.runner.clone(),
     );
     let mut runner = LoopRunner::new(&loop_cfg).map_err(anyhow::Error::msg)?;
+    let rt = loop_cfg.realtime_priority;
     let period = 1.0 / loop_cfg.rate_hz;
     let observer = LiveObserver::new(pos_in, status_in, publisher, period);
     if let (Some(hw), Some(device_in), Some(skin)) = (hardware.take(), device_in, skin) {
@@ -242,6 +243,7 @@ pub(super) fn start_session(
             stop.clone(),
             shared.clone(),
             device_name.to_string(),
+            rt,
         )?;
         return Ok(Session {
             stop,
@@ -262,7 +264,7 @@ pub(super) fn start_session(
     let haptic = std::thread::Builder::new()
         .name("haptic-loop".into())
         .spawn(move || {
-            raise_priority(&sh);
+            raise_priority(&sh, rt);
             let mut follower = RouteFollower::new(HandRoute::to(target));
             runner.run(&st, None, |_, _| {
                 let now = clock.now();
@@ -309,15 +311,13 @@ pub(super) fn start_session(
 /// Not a real-time FIFO policy: the loop's sleeper spins its last ~100 µs,
 /// and a FIFO thread spinning would starve the physics thread. Failure is
 /// logged, not fatal.
-pub(super) fn raise_priority(shared: &Shared) {
-    let got = haptic_priority();
+pub(super) fn raise_priority(shared: &Shared, realtime: bool) {
+    let got = haptic_priority(realtime);
     shared
         .haptic_priority
         .store(got as u8, std::sync::atomic::Ordering::Relaxed);
     match got {
-        HapticPriority::Realtime => {
-            tracing::info!("haptic loop at real-time priority (SCHED_FIFO {REALTIME_PRIORITY})")
-        }
+        HapticPriority::Realtime => tracing::info!("haptic loop at real-time priority (FIFO)"),
         HapticPriority::Raised => tracing::info!(
             "haptic loop at the highest time-sharing priority (real-time was refused: without CAP_SYS_NICE or an rtprio limit)"
         ),
@@ -327,41 +327,20 @@ pub(super) fn raise_priority(shared: &Shared) {
     }
 }
 
-/// The real-time priority asked for the haptic thread (1–99 on Linux):
-/// above the default of threaded IRQ handlers' neighbours (50) is not
-/// needed; the browser and the physics run at time-sharing priorities,
-/// which any real-time priority preempts.
-const REALTIME_PRIORITY: u8 = 40;
-
-/// Puts the calling (haptic) thread at real-time priority (FIFO) where
-/// permitted (issue 19: "the simulation keeps its rates under load",
-/// "real-time priority ... where permitted"), else at the highest
-/// time-sharing priority, else leaves it; says which it got. With FIFO the
+/// Puts the calling (haptic) thread where the loop runner will put it, and
+/// says which it got (issue 19: "real-time priority ... where permitted";
+/// the page shows it): with `realtime` (`[haptics.runner]
+/// realtime_priority`, default true) the runner's own request, FIFO where
+/// permitted ([`echothigh_haptics::runner::request_realtime_priority`]: the
+/// runner makes the same call as it starts, so the report is what the loop
+/// runs at), else the highest time-sharing priority. With FIFO the
 /// browser's work cannot delay the tick on any core: the thread preempts
-/// every time-shared thread, and it sleeps between ticks (the runner's
-/// spin is its last ~0.1 ms), so it does not starve the rest.
-fn haptic_priority() -> HapticPriority {
-    #[cfg(unix)]
-    {
-        use thread_priority::unix::{
-            set_thread_priority_and_policy, thread_native_id, RealtimeThreadSchedulePolicy,
-            ThreadSchedulePolicy,
-        };
-        use thread_priority::{ThreadPriority, ThreadPriorityValue};
-        if let Ok(v) = ThreadPriorityValue::try_from(REALTIME_PRIORITY) {
-            let fifo = ThreadSchedulePolicy::Realtime(RealtimeThreadSchedulePolicy::Fifo);
-            if set_thread_priority_and_policy(
-                thread_native_id(),
-                ThreadPriority::Crossplatform(v),
-                fifo,
-            )
-            .is_ok()
-            {
-                return HapticPriority::Realtime;
-            }
-        }
-    }
+/// every time-shared thread.
+fn haptic_priority(realtime: bool) -> HapticPriority {
     use thread_priority::{set_current_thread_priority, ThreadPriority};
+    if realtime && echothigh_haptics::runner::request_realtime_priority() {
+        return HapticPriority::Realtime;
+    }
     match set_current_thread_priority(ThreadPriority::Max) {
         Ok(()) => HapticPriority::Raised,
         Err(_) => HapticPriority::Normal,
