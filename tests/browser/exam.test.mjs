@@ -113,7 +113,7 @@ try {
       check(`case ${k}: the gauge shows the target band at ${site.name}`,
         !band.hidden && lo > 0 && hi > lo && lo <= band.max &&
           Math.abs(band.bottom - (lo / band.top) * 100) <= 0.051 && band.height > 0 &&
-          /^target \d+(\.\d)?–\d+(\.\d)? N$/.test(band.label),
+          /^target \d+(\.\d)?–\d+(\.\d)?\u00a0N$/.test(band.label),
         `band ${lo.toFixed(1)}–${hi.toFixed(1)} N (limit ${band.max.toFixed(1)} N), box at ${band.bottom}% + ${band.height}%, "${band.label}"`);
       if (k === 1) await page.screenshot({ path: join(shots, `06-exam-band-${site.name}.png`) });
       await page.evaluate(() => window.echothigh.send({ type: 'lift' }));

@@ -290,6 +290,25 @@ mod tests {
         assert!(wire.surface(&snap).is_none());
     }
 
+    /// Frame 0 is the image slot before the imaging thread's first render
+    /// (black): it is never sent, and the first rendered frame still goes
+    /// out as the key frame.
+    #[test]
+    fn the_slot_before_the_first_render_is_not_sent() {
+        let (w, h) = (16u32, 8u32);
+        let black = vec![0u8; (w * h) as usize];
+        let mut wire = WireState::default();
+        let at = |frame| ImageInfo {
+            width: w,
+            height: h,
+            frame,
+            time: 0.0,
+        };
+        assert!(wire.image(at(0), &black).is_none());
+        let f = wire.image(at(1), &black).expect("the first render");
+        assert_eq!(FrameHeader::parse(&f).unwrap().0.kind, FrameKind::ImagePng);
+    }
+
     /// Key frame then deltas rebuild every frame exactly; a held image with
     /// a few changed pixels costs a small fraction of a key frame.
     #[test]

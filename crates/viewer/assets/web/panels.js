@@ -95,7 +95,14 @@ export function drawVesselNames(ctx, w, h, labels, width, depth) {
     const colour = /a$/.test(l.id) ? '#ff6b6b' : '#6bb6ff';
     ctx.strokeStyle = colour; ctx.fillStyle = colour;
     ctx.beginPath(); ctx.ellipse(x, y, rx, ry, 0, 0, 2 * Math.PI); ctx.stroke();
-    ctx.fillText(VESSEL_NAMES[l.id] || l.id.toUpperCase(), x, y - ry - 2);
+    // The name stays inside the image, clear of the depth scale on the
+    // right edge: beside the outline, on the side towards the centre, when
+    // the vessel sits near an edge.
+    const name = VESSEL_NAMES[l.id] || l.id.toUpperCase();
+    const half = ctx.measureText(name).width / 2 + 2;
+    if (x + half > w - 24) { ctx.textAlign = 'right'; ctx.fillText(name, x - rx - 3, y); }
+    else if (x - half < 0) { ctx.textAlign = 'left'; ctx.fillText(name, x + rx + 3, y); }
+    else { ctx.textAlign = 'center'; ctx.fillText(name, x, y - ry - 2); }
   }
   ctx.restore();
 }
@@ -174,7 +181,7 @@ export class Gauge {
       this.band.style.bottom = `${lo.toFixed(1)}%`;
       this.band.style.height = `${(hi - lo).toFixed(1)}%`;
       const fmt = (f) => f.toFixed(f < 10 ? 1 : 0);
-      this.target.textContent = `target ${fmt(band[0])}–${fmt(band[1])} N`;
+      this.target.textContent = `target ${fmt(band[0])}–${fmt(band[1])}\u00a0N`;
       this.band.title = `target: a healthy vein here meets its walls at ${band[0].toFixed(1)} N; its artery is clearly oval at ${band[1].toFixed(1)} N (tissue force)`;
     }
   }
