@@ -4,6 +4,16 @@
 //! the layer's tangential (shear) support, a linear tie of each node to its
 //! rest position in the rest tangent plane (see [`TissueParams`]).
 //!
+//! **The normal spring is a column along the rest normal** ("nonlinear
+//! springs orthogonal to the surface", paper §3): its length is the node's
+//! height above its anchor along the rest normal `n₀`, `h = n₀·(x − a)`, and
+//! its force acts along `n₀`. A spring from the node to the anchor point
+//! instead turns with the node: compressed, its geometric stiffness
+//! `−|f|/l` pushes the node sideways, and under a concentrated load (20 N on
+//! three nodes of the cylinder) the node slid round the anchor and settled
+//! 26 mm *below* it (`tests/concentrated_load.rs`). The column has no
+//! geometric term; shear is the tangential tie's.
+//!
 //! Parameters are converted once from the resolution-independent
 //! [`TissueParams`] (see its docs) to per-spring values; the block indices
 //! each spring writes are cached so assembly allocates nothing and searches
@@ -15,8 +25,8 @@ use crate::edge_matrix::EdgeMatrix;
 use crate::force_model::{ForceModel, JacobianScratch};
 use crate::mesh::{EdgeKind, SurfaceMesh};
 use crate::springs::{
-    damper_force, damper_jacobian, linear_force, normal_energy, normal_force, normal_stiffness,
-    spring_force, spring_force_jacobian,
+    damper_jacobian, linear_force, normal_energy, normal_force, normal_stiffness,
+    spring_force_jacobian,
 };
 use crate::Vec3;
 use nalgebra::Matrix3;
@@ -33,24 +43,60 @@ struct LinearSpring {
     blocks: [usize; 4],
 }
 
-/// A nonlinear normal spring `f = x/(a x + b)` with a damper `c`, node → anchor.
+/// A nonlinear normal spring `f = x/(a x + b)` with a damper `c`: a column
+/// from the anchor along the rest normal, `x = n₀·(x_node − anchor) − rest`.
 #[derive(Debug, Clone, Copy)]
 struct NormalSpring {
     node: usize,
     anchor: Vec3,
+    /// Outward rest normal `n₀` (unit), the column's axis.
+    normal: Vec3,
     rest: f64,
     a: f64,
     b: f64,
     c: f64,
     /// Rest position of the node (m).
     rest_position: Vec3,
-    /// Tangential stiffness block `k_t (I − n₀ n₀ᵀ)` (N/m).
-    tangential_k: Matrix3<f64>,
-    /// Tangential damping block `c_t (I − n₀ n₀ᵀ)` (N·s/m).
-    tangential_c: Matrix3<f64>,
-    /// Smallest length allowed to a Newton iterate: `rest − (1 − margin) b/a`.
-    min_length: f64,
+    /// Tangential stiffness `k_t` (N/m) of the block `k_t (I − n₀ n₀ᵀ)`.
+    tangential_k: f64,
+    /// Tangential damping `c_t` (N·s/m) of the block `c_t (I − n₀ n₀ᵀ)`.
+    tangential_c: f64,
     diag: usize,
+}
+
+impl NormalSpring {
+    /// Change of the column's length (m, negative in compression) at `x`.
+    #[inline]
+    fn extension(&self, x: &Vec3) -> f64 {
+        self.normal.dot(&(x - self.anchor)) - self.rest
+    }
+
+    /// Force on the node (N) at position `x` (m), velocity `v` (m/s): the
+    /// column's spring and damper along `n₀`, the tie in the tangent plane.
+    #[inline]
+    fn force(&self, x: &Vec3, v: &Vec3) -> Vec3 {
+        let n = self.normal;
+        let u = x - self.rest_position;
+        let axial = normal_force(self.a, self.b, self.extension(x)) + self.c * n.dot(v);
+        let tangential_u = u - n * n.dot(&u);
+        let tangential_v = v - n * n.dot(v);
+        -(n * axial) - tangential_u * self.tangential_k - tangential_v * self.tangential_c
+    }
+
+    /// `α K + β B` of the node's own block (the negated Jacobians of
+    /// [`NormalSpring::force`]) as `p n₀ n₀ᵀ + q I`: `(p, q)`.
+    #[inline]
+    fn scaled_block(&self, x: &Vec3, alpha: f64, beta: f64) -> (f64, f64) {
+        let kn = normal_stiffness(self.a, self.b, self.extension(x));
+        let q = alpha * self.tangential_k + beta * self.tangential_c;
+        (alpha * kn + beta * self.c - q, q)
+    }
+
+    /// The block `p n₀ n₀ᵀ + q I` as a matrix.
+    #[inline]
+    fn block(&self, (p, q): (f64, f64)) -> Matrix3<f64> {
+        self.normal * self.normal.transpose() * p + Matrix3::from_diagonal_element(q)
+    }
 }
 
 /// The tissue's springs and dampers, ready to evaluate.
@@ -58,8 +104,9 @@ struct NormalSpring {
 pub struct TissueForces {
     springs: Vec<LinearSpring>,
     normals: Vec<NormalSpring>,
-    /// `(anchor, min_length)` of node `k`'s normal spring (m): the 32 bytes
-    /// the step limiter reads, apart from the 248-byte spring.
+    /// `(n₀, h_min)` of node `k`'s column: a Newton iterate must keep
+    /// `n₀·x ≥ h_min` (m), i.e. the column longer than
+    /// `rest − (1 − margin) b/a`. The 32 bytes the step limiter reads.
     limits: Vec<(Vec3, f64)>,
     geometric_in_compression: bool,
 }
@@ -112,9 +159,10 @@ impl TissueForces {
         let normals = (0..mesh.node_count())
             .map(|k| {
                 let anchor = mesh.anchors()[k];
-                let rest = (x0[k] - anchor).norm();
                 let n0 = mesh.rest_normals()[k];
-                let tangent = Matrix3::identity() - n0 * n0.transpose();
+                // The anchors lie on the inward rest normal (mesh.rs), so
+                // the column's rest height is the node–anchor distance.
+                let rest = n0.dot(&(x0[k] - anchor));
                 // Layer of rest length L = λ L_ref and stiffness factor φ:
                 // p(x) = φ (x/λ) / (normal_a (x/λ) + normal_b), i.e. the
                 // reference law at the same strain (a = normal_a/(φA),
@@ -128,25 +176,29 @@ impl TissueForces {
                 let (lambda, phi) = (mesh.layer_scales()[k], mesh.stiffness_factors()[k]);
                 let asymptote = lambda * params.asymptote();
                 let shear = phi;
-                NormalSpring {
+                let min_length = rest - (1.0 - margin) * asymptote;
+                let spring = NormalSpring {
                     rest_position: x0[k],
-                    tangential_k: tangent * (shear * params.tangential_stiffness * areas[k]),
-                    tangential_c: tangent * (shear * params.tangential_damping * areas[k]),
+                    tangential_k: shear * params.tangential_stiffness * areas[k],
+                    tangential_c: shear * params.tangential_damping * areas[k],
                     node: k,
                     anchor,
+                    normal: n0,
                     rest,
                     a: params.normal_a / (phi * areas[k]),
                     b: lambda * params.normal_b / (phi * areas[k]),
                     c: params.normal_damping * areas[k],
-                    min_length: rest - (1.0 - margin) * asymptote,
                     diag: pattern.diagonal_index(k),
-                }
+                };
+                (spring, (n0, n0.dot(&anchor) + min_length))
             })
-            .collect::<Vec<NormalSpring>>();
-        debug_assert!(normals.iter().enumerate().all(|(k, s)| s.node == k));
+            .collect::<Vec<_>>();
+        debug_assert!(normals.iter().enumerate().all(|(k, (s, _))| s.node == k));
+        let limits = normals.iter().map(|(_, l)| *l).collect();
+        let normals = normals.into_iter().map(|(s, _)| s).collect();
         TissueForces {
             springs,
-            limits: normals.iter().map(|s| (s.anchor, s.min_length)).collect(),
+            limits,
             normals,
             geometric_in_compression,
         }
@@ -178,10 +230,11 @@ impl TissueForces {
             .normals
             .iter()
             .map(|s| {
-                let e = (x[s.node] - s.anchor).norm() - s.rest;
+                let e = s.extension(&x[s.node]);
                 let u = x[s.node] - s.rest_position;
+                let tangential = u - s.normal * s.normal.dot(&u);
                 if s.a * e + s.b > 0.0 {
-                    normal_energy(s.a, s.b, e) + 0.5 * u.dot(&(s.tangential_k * u))
+                    normal_energy(s.a, s.b, e) + 0.5 * s.tangential_k * tangential.norm_squared()
                 } else {
                     f64::INFINITY
                 }
@@ -215,9 +268,9 @@ impl TissueForces {
             out[s.j] -= su;
         }
         for s in &self.normals {
-            let law = |e| (normal_force(s.a, s.b, e), normal_stiffness(s.a, s.b, e));
-            let (_, stiff) = spring_force_jacobian(&x[s.node], &s.anchor, s.rest, law, geo);
-            out[s.node] -= (stiff + s.tangential_k) * (w[s.node] * alpha);
+            let (p, q) = s.scaled_block(&x[s.node], alpha, 0.0);
+            let w = w[s.node];
+            out[s.node] -= s.normal * (p * s.normal.dot(&w)) + w * q;
         }
     }
 
@@ -226,32 +279,24 @@ impl TissueForces {
     pub fn max_asymptote_ratio(&self, x: &[Vec3]) -> f64 {
         self.normals
             .iter()
-            .map(|s| (s.rest - (x[s.node] - s.anchor).norm()) * s.a / s.b)
+            .map(|s| -s.extension(&x[s.node]) * s.a / s.b)
             .fold(f64::NEG_INFINITY, f64::max)
     }
 }
 
-/// Largest `α ∈ [0, 1]` with `|p + s d| ≥ l_min` for all `s ∈ [0, α]`.
-fn path_fraction(p: &Vec3, d: &Vec3, l_min: f64) -> f64 {
-    let dd = d.norm_squared();
-    if dd == 0.0 {
-        return 1.0;
+/// Largest `α ∈ [0, 1]` with `n·(x + s dx) ≥ h_min` for all `s ∈ [0, α]`
+/// (the column's height stays above its limit; linear in `s`).
+#[inline]
+fn path_fraction(n: &Vec3, h_min: f64, x: &Vec3, dx: &Vec3) -> f64 {
+    let rate = n.dot(dx);
+    if rate >= 0.0 {
+        return 1.0; // moving away from the anchor: the column lengthens
     }
-    let pd = p.dot(d);
-    let c = p.norm_squared() - l_min * l_min;
-    if pd >= 0.0 {
-        return 1.0; // moving away from the anchor: the length grows
-    }
-    if c <= 0.0 {
+    let room = n.dot(x) - h_min;
+    if room <= 0.0 {
         return 0.0; // at the limit and moving inward
     }
-    let disc = pd * pd - dd * c;
-    if disc < 0.0 {
-        return 1.0; // the path passes beside the forbidden ball
-    }
-    // Smaller root of dd s² + 2 pd s + c = 0, in the stable form.
-    let s = c / (-pd + disc.sqrt());
-    s.min(1.0)
+    (room / -rate).min(1.0)
 }
 
 impl ForceModel for TissueForces {
@@ -282,13 +327,8 @@ impl ForceModel for TissueForces {
         if row != usize::MAX {
             f[row] += acc;
         }
-        let zero = Vec3::zeros();
         for s in &self.normals {
-            let k = s.node;
-            f[k] += spring_force(&x[k], &s.anchor, s.rest, |e| normal_force(s.a, s.b, e))
-                + damper_force(&x[k], &s.anchor, &v[k], &zero, s.c)
-                - s.tangential_k * (x[k] - s.rest_position)
-                - s.tangential_c * v[k];
+            f[s.node] += s.force(&x[s.node], &v[s.node]);
         }
     }
 
@@ -323,10 +363,7 @@ impl ForceModel for TissueForces {
             a.add_at(ji, &block);
         }
         for s in &self.normals {
-            let law = |e| (normal_force(s.a, s.b, e), normal_stiffness(s.a, s.b, e));
-            let (_, stiff) = spring_force_jacobian(&x[s.node], &s.anchor, s.rest, law, geo);
-            let damp = damper_jacobian(&x[s.node], &s.anchor, s.c);
-            let block = (stiff + s.tangential_k) * alpha + (damp + s.tangential_c) * beta;
+            let block = s.block(s.scaled_block(&x[s.node], alpha, beta));
             a.add_at(s.diag, &-block);
         }
     }
@@ -359,10 +396,7 @@ impl ForceModel for TissueForces {
             debug_assert!(written.is_ok());
         }
         for s in &self.normals {
-            let law = |e| (normal_force(s.a, s.b, e), normal_stiffness(s.a, s.b, e));
-            let (_, stiff) = spring_force_jacobian(&x[s.node], &s.anchor, s.rest, law, geo);
-            let damp = damper_jacobian(&x[s.node], &s.anchor, s.c);
-            let block = (stiff + s.tangential_k) * alpha + (damp + s.tangential_c) * beta;
+            let block = s.block(s.scaled_block(&x[s.node], alpha, beta));
             a.add_diagonal(s.node, &-block);
         }
     }
@@ -384,23 +418,18 @@ impl ForceModel for TissueForces {
             b.add_at(ji, &damp);
         }
         for s in &self.normals {
-            let law = |e| (normal_force(s.a, s.b, e), normal_stiffness(s.a, s.b, e));
-            let (_, stiff) = spring_force_jacobian(&x[s.node], &s.anchor, s.rest, law, geo);
-            k.add_at(s.diag, &-(stiff + s.tangential_k));
-            b.add_at(
-                s.diag,
-                &-(damper_jacobian(&x[s.node], &s.anchor, s.c) + s.tangential_c),
-            );
+            k.add_at(s.diag, &-s.block(s.scaled_block(&x[s.node], 1.0, 0.0)));
+            b.add_at(s.diag, &-s.block(s.scaled_block(&x[s.node], 0.0, 1.0)));
         }
     }
 
-    /// Keeps every normal spring longer than `rest − (1 − margin) b/a` along
+    /// Keeps every normal column longer than `rest − (1 − margin) b/a` along
     /// the straight path from `x` to `x + dx`.
     fn max_step_fraction(&self, x: &[Vec3], dx: &[Vec3]) -> f64 {
         self.limits
             .iter()
             .zip(x.iter().zip(dx))
-            .map(|((anchor, min_length), (x, dx))| path_fraction(&(x - anchor), dx, *min_length))
+            .map(|((n, h_min), (x, dx))| path_fraction(n, *h_min, x, dx))
             .fold(1.0, f64::min)
     }
 }
@@ -411,15 +440,22 @@ mod tests {
     use crate::Vec3;
 
     #[test]
-    fn path_fraction_stops_on_the_limit_sphere() {
-        // From 0.04 m straight towards the anchor, limit at 0.01 m: s = 0.75 of 0.04.
-        let p = Vec3::new(0.0, 0.04, 0.0);
+    fn path_fraction_stops_on_the_limit_plane() {
+        // Column axis +y, limit at height 0.01 m, from 0.04 m straight down
+        // by 0.04 m: the limit is reached at s = 0.75.
+        let n = Vec3::new(0.0, 1.0, 0.0);
+        let x = Vec3::new(0.3, 0.04, 0.0);
         let d = Vec3::new(0.0, -0.04, 0.0);
-        assert!((path_fraction(&p, &d, 0.01) - 0.75).abs() < 1e-12);
-        assert_eq!(path_fraction(&p, &(d * 0.5), 0.01), 1.0);
-        assert_eq!(path_fraction(&p, &(-d), 0.01), 1.0);
-        // Passing beside the ball.
-        let side = Vec3::new(1.0, -0.04, 0.0);
-        assert_eq!(path_fraction(&Vec3::new(-0.5, 0.04, 0.0), &side, 0.01), 1.0);
+        assert!((path_fraction(&n, 0.01, &x, &d) - 0.75).abs() < 1e-12);
+        assert_eq!(path_fraction(&n, 0.01, &x, &(d * 0.5)), 1.0);
+        assert_eq!(path_fraction(&n, 0.01, &x, &(-d)), 1.0);
+        // A sideways move does not shorten the column, however long.
+        let side = Vec3::new(1.0, 0.0, 0.0);
+        assert_eq!(path_fraction(&n, 0.01, &x, &side), 1.0);
+        // Oblique: only the axial part counts (0.03 m of room, 0.06 m down).
+        let oblique = Vec3::new(5.0, -0.06, 0.0);
+        assert!((path_fraction(&n, 0.01, &x, &oblique) - 0.5).abs() < 1e-12);
+        // At the limit, moving in: no step at all.
+        assert_eq!(path_fraction(&n, 0.04, &x, &d), 0.0);
     }
 }

@@ -20,11 +20,7 @@ pub struct Args {
     /// Parameters to fit: any of normal_a, normal_b, asymptote (the normal
     /// springs' asymptote as a fraction of the tissue thickness),
     /// structural_stiffness, tangential_stiffness (comma-separated).
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "normal_b,asymptote,structural_stiffness"
-    )]
+    #[arg(long, value_delimiter = ',', default_value = "normal_b,asymptote")]
     fit: Vec<String>,
     /// Physics step of the simulated experiment (s), in [1e-3, 0.1]: the
     /// experiment is quasi-static (5 mm/s), so 1 ms already resolves it, and

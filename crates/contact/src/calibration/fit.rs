@@ -122,8 +122,9 @@ pub struct Calibration {
     pub contact: ContactParams,
     /// The experiment (its `max_depth` is set to the data's last depth).
     pub experiment: Indentation,
-    /// Parameters to adjust (default: `normal_b`, the asymptote fraction,
-    /// `structural_stiffness`).
+    /// Parameters to adjust (default: `normal_b` and the asymptote fraction;
+    /// `structural_stiffness` is held at its calibrated value, see
+    /// `data/indentation-default.md`).
     pub parameters: Vec<FitParameter>,
     /// Fitter options.
     pub lm: LmOptions,
@@ -136,11 +137,10 @@ impl Default for Calibration {
             probe: Probe::default(),
             contact: ContactParams::default(),
             experiment: Indentation::default(),
-            parameters: vec![
-                FitParameter::NormalB,
-                FitParameter::Asymptote,
-                FitParameter::StructuralStiffness,
-            ],
+            // The membrane's structural modulus is held: fitted too, it goes
+            // to its lower bound (1 N/m, the default), where every trial
+            // step below the bound is rejected and the fitter stalls.
+            parameters: vec![FitParameter::NormalB, FitParameter::Asymptote],
             lm: LmOptions {
                 max_iterations: 30,
                 fd_step: 1e-4,

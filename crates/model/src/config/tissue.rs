@@ -6,10 +6,11 @@ use serde::{Deserialize, Serialize};
 
 /// Tissue parameters, all resolution independent.
 ///
-/// **Calibrated defaults.** `normal_a`, `normal_b` and `structural_stiffness`
-/// are the Levenberg–Marquardt fit (`echothigh calibrate`, crate
+/// **Calibrated defaults.** `normal_a` and `normal_b` are the
+/// Levenberg–Marquardt fit (`echothigh calibrate`, crate
 /// `echothigh-contact`) of `data/indentation-default.csv` with
-/// `tangential_stiffness` held at 1e6.
+/// `tangential_stiffness` held at 1e6 and `structural_stiffness` at 1, the
+/// lower bound a fit of it reaches (see `data/indentation-default.md`).
 ///
 /// **Masses.** Node mass = `areal_density` × node area (kg).
 ///
@@ -51,8 +52,10 @@ pub struct TissueParams {
     /// Membrane modulus of the structural springs (θ and z neighbours)
     /// (N/m), in [1, 1e5]: skin's Young's modulus ~0.1–10 MPa (Duck 1990)
     /// times its ~2 mm thickness gives 2e2–2e4 N/m; the calibrated default is
-    /// lower (the fat below is softer), and 1e5 leaves margin. Default 100.8
-    /// (calibrated, see below).
+    /// lower (the fat below is softer), and 1e5 leaves margin. Default 1.0,
+    /// the lower bound (calibrated, see above: with the normal springs as
+    /// columns along the rest normal, the indentation curve leaves the
+    /// membrane nothing to carry; the shear and bending springs remain).
     pub structural_stiffness: f64,
     /// Membrane modulus of the shear springs (quad diagonals) (N/m), in [0,
     /// 1e5] (as `structural_stiffness`; 0 = no shear springs). Default 50.
@@ -74,12 +77,12 @@ pub struct TissueParams {
     /// Normal spring `a` per unit area (m²/N = 1/Pa), in [1e-7, 1e-2]: `1/a`
     /// is the tension the layer saturates at, from 100 Pa (fat) to 10 MPa
     /// (tendon); the asymptote `b/a` must also lie inside the tissue.
-    /// Default 7.638e-5.
+    /// Default 6.632e-5.
     pub normal_a: f64,
     /// Normal spring `b` per unit area (m³/N = m/Pa): `1/normal_b` is the
     /// initial stiffness per unit area, in [1e-9, 1e-3]: soft tissue moduli
     /// of 1 kPa–1 MPa (Duck 1990) over 1 mm–0.2 m of thickness give
-    /// `E / L` of 5e3–1e9 Pa/m. Default 2.865e-6 (asymptote 37.5 mm).
+    /// `E / L` of 5e3–1e9 Pa/m. Default 2.629e-6 (asymptote 39.64 mm).
     pub normal_b: f64,
     /// Normal damper per unit area (N·s/m³): node damping = this × node area,
     /// in [0, 1e6] (from none to ~100× critical damping of the default layer:
@@ -105,14 +108,14 @@ impl Default for TissueParams {
     fn default() -> Self {
         TissueParams {
             areal_density: 10.0,
-            structural_stiffness: 100.8,
+            structural_stiffness: 1.0,
             shear_stiffness: 50.0,
             bending_stiffness: 20.0,
             structural_damping: 0.2,
             shear_damping: 0.05,
             bending_damping: 0.02,
-            normal_a: 7.638e-5,
-            normal_b: 2.865e-6,
+            normal_a: 6.632e-5,
+            normal_b: 2.629e-6,
             normal_damping: 2000.0,
             tangential_stiffness: 1.0e6,
             tangential_damping: 500.0,

@@ -74,14 +74,18 @@ impl Publisher {
         let model = physics.model();
         if let Ok(mut snap) = self.shared.snapshot.try_lock() {
             let mesh = model.mesh();
-            let (x, anchors, rest) = (model.positions(), mesh.anchors(), mesh.rest_positions());
+            let (x, rest, normals) = (
+                model.positions(),
+                mesh.rest_positions(),
+                mesh.rest_normals(),
+            );
             snap.positions.clear();
             snap.compression.clear();
             for i in 0..x.len() {
                 snap.positions
                     .push([x[i].x as f32, x[i].y as f32, x[i].z as f32]);
-                let c =
-                    ((rest[i] - anchors[i]).norm() - (x[i] - anchors[i]).norm()) / self.asymptote;
+                // The normal column's compression (along the rest normal).
+                let c = normals[i].dot(&(rest[i] - x[i])) / self.asymptote;
                 snap.compression.push(c.clamp(0.0, 1.0) as f32);
             }
             snap.status.time = now;
