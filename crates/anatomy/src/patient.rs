@@ -117,9 +117,9 @@ pub struct Patient {
     /// to the knee, rounded up to a whole newton. The scenario lowers its
     /// force scale, when it must, so that the device renders this force
     /// unsaturated (issue 12: "the force scale and device limits must still
-    /// let a trainee close a healthy vein there"). Lean male 35 (34.8 N over
-    /// the popliteal vein 310 mm below the groin), average female 35 (34.5 N,
-    /// popliteal, 270 mm), obese 49 (48.6 N, popliteal, 310 mm) (derived:
+    /// let a trainee close a healthy vein there"). Lean male 36 (35.7 N over
+    /// the popliteal vein 310 mm below the groin), average female 35 (34.7 N,
+    /// popliteal, 270 mm), obese 50 (49.5 N, popliteal, 310 mm) (derived:
     /// measured on the physical model by
     /// `runtime/tests/coaptation_along_leg.rs`, which checks each preset's
     /// value against its own presses). The force depends on the vessels'

@@ -109,8 +109,12 @@ fn default_data_parses_and_is_in_the_band() {
 
 /// Started with the normal springs' asymptote at its bound (the tissue
 /// thickness, where the fitted logit is flat), the fit of the default data
-/// must leave the bound: the default curve's best fit is interior (39.48 mm
-/// of 40, a fraction 0.987), and a fitter stuck at the start stays at 40 mm.
+/// must leave the bound and arrive where the default parameters are: the
+/// curve's best fit is interior (39.64 mm of 40, a fraction 0.991), and a
+/// fitter stuck at the start stays at 39.996 mm. The two fits start apart
+/// and stop on the fitter's step tolerance (1e-7 in the logit), so they
+/// agree to far better than the 0.1 mm asserted, which is still 36× closer
+/// than the start.
 #[test]
 fn fit_of_the_default_data_leaves_the_asymptote_bound() {
     let mut start = ModelConfig::default();
@@ -122,7 +126,13 @@ fn fit_of_the_default_data_leaves_the_asymptote_bound() {
     };
     let data = IndentationCurve::from_csv_str(DEFAULT_CSV).unwrap();
     let rep = calibrate(&cal, &data).unwrap();
-    let fraction = rep.tissue.asymptote() / cal.model.thigh.tissue_thickness;
-    assert!(fraction < 0.99, "asymptote fraction {fraction}");
+    let fitted = rep.tissue.asymptote();
+    let default = ModelConfig::default().tissue.asymptote();
+    assert!(
+        (fitted - default).abs() < 1e-4,
+        "asymptote {:.3} mm, the default's {:.3} mm",
+        fitted * 1e3,
+        default * 1e3
+    );
     assert!(rep.rms < 0.15, "rms {} N", rep.rms);
 }

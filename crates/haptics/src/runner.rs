@@ -126,22 +126,8 @@ static PRIORITY_WARNED: AtomicBool = AtomicBool::new(false);
 /// Returns whether real-time priority was obtained; logs a failure once per
 /// process.
 pub fn request_realtime_priority() -> bool {
-    #[cfg(unix)]
-    {
-        use thread_priority::unix::{
-            set_thread_priority_and_policy, thread_native_id, RealtimeThreadSchedulePolicy,
-            ThreadSchedulePolicy,
-        };
-        let policy = ThreadSchedulePolicy::Realtime(RealtimeThreadSchedulePolicy::Fifo);
-        if set_thread_priority_and_policy(
-            thread_native_id(),
-            thread_priority::ThreadPriority::Max,
-            policy,
-        )
-        .is_ok()
-        {
-            return true;
-        }
+    if request_fifo(thread_priority::ThreadPriority::Max) {
+        return true;
     }
     let fallback =
         thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Max);
@@ -152,6 +138,26 @@ pub fn request_realtime_priority() -> bool {
         );
     }
     false
+}
+
+/// Puts the calling thread under the real-time FIFO policy at `priority`
+/// (on Linux 1–99, higher first); whether the kernel granted it (it needs
+/// `CAP_SYS_NICE` or an `RLIMIT_RTPRIO` limit). Nothing changes on refusal.
+pub fn request_fifo(priority: thread_priority::ThreadPriority) -> bool {
+    #[cfg(unix)]
+    {
+        use thread_priority::unix::{
+            set_thread_priority_and_policy, thread_native_id, RealtimeThreadSchedulePolicy,
+            ThreadSchedulePolicy,
+        };
+        let policy = ThreadSchedulePolicy::Realtime(RealtimeThreadSchedulePolicy::Fifo);
+        set_thread_priority_and_policy(thread_native_id(), priority, policy).is_ok()
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = priority;
+        false
+    }
 }
 
 /// Fixed-rate loop runner.

@@ -210,10 +210,12 @@ pub fn run_threads_on<D: TickDevice + Send + 'static>(
     let physics_stop = Arc::new(AtomicBool::new(false));
     let ps = physics_stop.clone();
     let rate = c.physics_rate;
+    let realtime = scenario.haptics.runner.realtime_priority;
     let physics_thread = std::thread::Builder::new()
         .name("physics".into())
         .spawn(
             move || -> Result<(PhysicsReport, RecordSink<PhysicsRecord>)> {
+                crate::physics_loop::request_physics_priority(realtime);
                 let report = physics_loop(
                     &mut physics,
                     &mut physics_end,

@@ -61,7 +61,7 @@ pub struct PressConfig {
     pub target_force: f64,
     /// The cap (N) of an `adequate` press, in [1.5, 40] when given. Default
     /// (absent): the case's patient's exam force
-    /// (`echothigh_anatomy::Patient::exam_force`, 35–49 N on the presets),
+    /// (`echothigh_anatomy::Patient::exam_force`, 35–50 N on the presets),
     /// the force at which the artery is clearly oval at the leg's hardest
     /// level and the device's renderable limit (issue 12), so that an
     /// adequate press can close a healthy vein at every level of every

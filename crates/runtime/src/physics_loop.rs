@@ -78,6 +78,37 @@ pub fn physics_loop(
     )
 }
 
+/// The physics thread's real-time FIFO priority: below the haptic loop's
+/// (the policy's maximum, 99 on Linux), so the tick still preempts it, and
+/// above every time-shared thread, so a busy browser on the same machine no
+/// longer starves the model (issue 19: physics fell from 100 to 23–39 Hz
+/// under Chromium on two cores). A step takes ~1 ms of its 10 ms period on
+/// the default mesh; a loop that falls behind runs flat out, and the
+/// kernel's real-time throttling (`sched_rt_runtime_us`, 95 % by default)
+/// still leaves the core's other threads their share.
+pub const PHYSICS_FIFO_PRIORITY: u8 = 50;
+
+/// Puts the calling (physics) thread at [`PHYSICS_FIFO_PRIORITY`] when
+/// `realtime` (`[haptics.runner] realtime_priority`) and the kernel permits;
+/// logs what it got and returns whether FIFO was granted.
+pub fn request_physics_priority(realtime: bool) -> bool {
+    use thread_priority::{ThreadPriority, ThreadPriorityValue};
+    if !realtime {
+        return false;
+    }
+    let granted = ThreadPriorityValue::try_from(PHYSICS_FIFO_PRIORITY)
+        .is_ok_and(|p| echothigh_haptics::runner::request_fifo(ThreadPriority::Crossplatform(p)));
+    if granted {
+        tracing::info!(
+            priority = PHYSICS_FIFO_PRIORITY,
+            "physics thread at real-time priority (FIFO)"
+        );
+    } else {
+        tracing::info!("physics thread time-shared (real-time priority refused)");
+    }
+    granted
+}
+
 /// [`physics_loop`] calling `after_step(physics, probe)` after every step
 /// (e.g. to publish the deformation to a viewer).
 #[allow(clippy::too_many_arguments)]

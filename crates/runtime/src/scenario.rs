@@ -183,8 +183,8 @@ impl Scenario {
     /// that the device's peak force stands for at least the patient's exam
     /// force (`Patient::exam_force`):
     /// `scale = min(device.force_scale, device.max_force / exam_force)`. The
-    /// lean leg's popliteal artery is clearly oval only at ~35 N and the
-    /// obese leg's at ~49 N; through the default 6 N device they are then
+    /// lean leg's popliteal artery is clearly oval only at ~36 N and the
+    /// obese leg's at ~50 N; through the default 6 N device they are then
     /// felt unsaturated (issue 12; the fidelity review's row 8: "the 20 N
     /// ceiling is too low"). A leg within the configured range keeps the
     /// configured scale. Every loop, the live system's limits and the

@@ -166,7 +166,7 @@ fn thorough_trainee_finds_the_isolated_fv_thrombus() {
 
 /// The thorough trainee on the obese leg (issue 12: the force scale and
 /// the device's limits must let a trainee close a healthy vein there): an
-/// adequate press, capped at the patient's exam force (49 N) instead of
+/// adequate press, capped at the patient's exam force (50 N) instead of
 /// the former fixed 20 N, closes every imageable bin and every call is
 /// right. (Measured: the hardest bin, FV at 210 mm, coapted at 20.0 N, at
 /// the former cap; `coaptation_along_leg.rs` presses straight in and finds

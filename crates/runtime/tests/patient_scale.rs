@@ -22,7 +22,7 @@ fn each_leg_is_rendered_up_to_its_exam_force_and_no_further() {
         let exam = Patient::preset(preset).unwrap().exam_force;
         let d = s.device();
         // The default 6 N device at 0.3 renders 20 N, below every preset's
-        // exam force (35–49 N): the scale is lowered to exactly cover it.
+        // exam force (35–50 N): the scale is lowered to exactly cover it.
         assert!(exam > s.device.max_force / s.device.force_scale, "{preset}");
         let renderable = d.max_force / d.force_scale;
         assert!(
@@ -46,7 +46,7 @@ fn each_leg_is_rendered_up_to_its_exam_force_and_no_further() {
 #[test]
 fn a_device_that_covers_the_leg_keeps_its_scale() {
     let mut s = on("obese");
-    // 30 N at 0.3 stands for 100 N of tissue force, beyond the obese 49 N.
+    // 30 N at 0.3 stands for 100 N of tissue force, beyond the obese 50 N.
     s.device.max_force = 30.0;
     assert_eq!(s.device().force_scale, 0.3);
 }
@@ -79,7 +79,7 @@ fn a_patient_file_with_a_bad_exam_force_is_refused_naming_it() {
 }
 
 /// A real device's own peak force sets the scale (issue 12): a Touch's
-/// 3.3 N is scaled to stand for the lean leg's 35 N exam force; an
+/// 3.3 N is scaled to stand for the lean leg's 36 N exam force; an
 /// omega.6's 12 N at the configured 0.3 already renders 40 N and keeps
 /// it; a peak that is not a positive, finite force is refused, naming it.
 #[test]

@@ -123,6 +123,10 @@ pub fn server(args: ServerArgs) -> Result<()> {
     let mut first = true;
     let mut served = 0u32;
     let mut result = Ok(());
+    // This thread runs the physics loop: real-time where permitted.
+    echothigh_runtime::physics_loop::request_physics_priority(
+        scenario.haptics.runner.realtime_priority,
+    );
     'sessions: while !stop.load(Ordering::Relaxed) {
         let mut physics = PhysicsSide::new(&scenario)?;
         let clock = Clock::start();

@@ -183,11 +183,13 @@ pub(super) fn start_session(
     if !direct {
         let mut physics = physics_for(scenario)?;
         let (st, rate, sh) = (stop.clone(), c.physics_rate, shared.clone());
+        let realtime = scenario.haptics.runner.realtime_priority;
         let mut physics_end: InProcessEndpoint = physics_end;
         physics_thread = Some(
             std::thread::Builder::new()
                 .name("physics".into())
                 .spawn(move || {
+                    crate::physics_loop::request_physics_priority(realtime);
                     let mut records = crate::recorder::RecordSink::Discard;
                     let r = physics_loop_with(
                         &mut physics,
