@@ -146,6 +146,8 @@ const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
   const tick = (t) => { frames.push(t - last); last = t; if (run) requestAnimationFrame(tick); };
   requestAnimationFrame(tick);
   const bytes0 = L.bytes, t00 = performance.now();
+  // The page's own costs during the measurement (ms; see app.js `costs`).
+  L.costs.image.length = 0; L.costs.render.length = 0;
   // When each image reaches the page during the measurement (its own
   // delivery interval bounds the image lag; see the checks below).
   const imageAt = [];
@@ -219,6 +221,8 @@ const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
     state: { p50: q(state, 0.5), p95: q(state, 0.95), max: q(state, 1) },
     image: { p50: q(image, 0.5), p95: q(image, 0.95), max: q(image, 1) },
     stale_images: { p50: q(stale, 0.5), max: q(stale, 1) },
+    image_arrival_to_drawn: { p50: q(L.costs.image, 0.5), p95: q(L.costs.image, 0.95) },
+    render_3d_cost: { p50: q(L.costs.render, 0.5), p95: q(L.costs.render, 0.95) },
     frame_p95: q(frames, 0.95), frames: frames.length,
     image_interval_p95: q(imageIntervals, 0.95), images: imageAt.length,
     bytes_per_s: (L.bytes - bytes0) / secs, seconds: secs, misses: misses.slice(0, 10),
@@ -604,7 +608,15 @@ try {
         : { events: t.length };
     };
     const a = window.echothigh.arrivals;
+    // Durations (ms): an image from arrival to drawing, one 3D render.
+    const cost = (d) => {
+      const s = [...d].sort((x, y) => x - y);
+      const q = (p) => s[Math.min(s.length - 1, Math.floor(p * s.length))];
+      return s.length ? { samples: s.length, median_ms: q(0.5), p95_ms: q(0.95), max_ms: s[s.length - 1] } : { samples: 0 };
+    };
+    const c = window.echothigh.costs;
     return { state: summary(a.state), image: summary(a.image), render_3d: summary(a.render),
+      image_arrival_to_drawn: cost(c.image), render_3d_cost: cost(c.render),
       user_agent: navigator.userAgent, webgl_renderer: (() => {
         const g = document.createElement('canvas').getContext('webgl');
         const ext = g && g.getExtension('WEBGL_debug_renderer_info');
@@ -614,6 +626,8 @@ try {
   writeFileSync(join(shots, 'viewer-rates.json'), JSON.stringify(rates, null, 2));
   const hz = (r) => (r.rate_hz ? `${r.rate_hz.toFixed(1)} Hz` : 'n/a');
   console.log(`info page rates: state ${hz(rates.state)}, image ${hz(rates.image)}, 3D render ${hz(rates.render_3d)} (${join(shots, 'viewer-rates.json')})`);
+  const costMs = (c) => (c.samples ? `median ${c.median_ms.toFixed(0)} ms, p95 ${c.p95_ms.toFixed(0)} ms` : 'n/a');
+  console.log(`info page costs: image arrival to drawn ${costMs(rates.image_arrival_to_drawn)}; one 3D render ${costMs(rates.render_3d_cost)}`);
 
   // ---- Lag and bytes (issue 19) at 1280×800, CPU throttled ×THROTTLE. ----
   await page.setViewportSize({ width: 1280, height: 800 });
@@ -625,7 +639,8 @@ try {
   writeFileSync(join(shots, 'viewer-lag.json'), JSON.stringify(lag, null, 2));
   const ms = (x) => (x === null ? 'n/a' : `${x.toFixed(0)} ms`);
   console.log(`info lag over ${lag.commands} commands (${lag.missed} missed: no state effect within 3 s of simulated time, counted as 3 s, or more than ${MAX_STALE_IMAGES} stale images first; stale images p50 ${lag.stale_images.p50} max ${lag.stale_images.max}): state p50 ${ms(lag.state.p50)} p95 ${ms(lag.state.p95)}, ` +
-    `image p50 ${ms(lag.image.p50)} p95 ${ms(lag.image.p95)}; page frames p95 ${ms(lag.frame_p95)}; ${(lag.bytes_per_s / 1000).toFixed(0)} KB/s (${join(shots, 'viewer-lag.json')})`);
+    `image p50 ${ms(lag.image.p50)} p95 ${ms(lag.image.p95)}; page frames p95 ${ms(lag.frame_p95)}; ${(lag.bytes_per_s / 1000).toFixed(0)} KB/s (${join(shots, 'viewer-lag.json')}); ` +
+    `the page's costs: an image arrival to drawn p50 ${ms(lag.image_arrival_to_drawn.p50)} p95 ${ms(lag.image_arrival_to_drawn.p95)}, one 3D render p50 ${ms(lag.render_3d_cost.p50)} p95 ${ms(lag.render_3d_cost.p95)}`);
   // The wire's budget is 360 KB/s of payload by construction (the server's
   // token bucket, frames.rs), so 400 KB/s holds whatever the machine's load.
   check('bytes per second per tab within the 400 KB/s budget', lag.bytes_per_s <= 400_000,

@@ -33,11 +33,14 @@ const live = {
   // the message) and image ('image', its simulated time): for measurements.
   listeners: [],
   // Arrival times (ms, performance.now) of the last 300 states, images and rendered frames.
-  arrivals: { state: [], image: [], render: [] }, probe: { theta: 0, z: 0, depth: 0.008, tilt: 0, placed: false },
+  arrivals: { state: [], image: [], render: [] },
+  // Where the page's time goes (ms, the last 300 of each): an image from
+  // its arrival to its drawing, and one 3D render.
+  costs: { image: [], render: [] }, probe: { theta: 0, z: 0, depth: 0.008, tilt: 0, placed: false },
 };
 window.echothigh = live;
-function stamp(list) {
-  list.push(performance.now());
+function stamp(list, value = performance.now()) {
+  list.push(value);
   if (list.length > 300) list.shift();
 }
 
@@ -140,12 +143,14 @@ function onFrame(buf) {
     const png = new Blob([new Uint8Array(buf, at, len)], { type: 'image/png' });
     const codes = flow ? new Blob([new Uint8Array(buf, at + len)], { type: 'image/png' }) : null;
     const key = kind === FRAME_IMAGE_PNG || kind === FRAME_IMAGE_PNG_FLOW;
+    const arrived = performance.now();
     // Decoded in arrival order: a delta applies to the image before it.
     imageChain = imageChain.then(() => Promise.all([decodeGray(png, a, b), codes && decodeGray(codes, a, b)])).then(([px, overlay]) => {
       if (key) gray = px;
       else if (gray && gray.length === px.length) for (let i = 0; i < px.length; i++) gray[i] = (gray[i] + px[i]) & 255;
       else return; // a delta without its key frame (cannot happen on one connection)
       showImage(a, b, gray, time, overlay);
+      stamp(live.costs.image, performance.now() - arrived);
     }).catch((e) => toast(`image: ${e.message}`))
       // Flow control: the server sends the next image once this one is shown.
       .finally(() => send({ type: 'image_ack' }));
@@ -401,7 +406,9 @@ function frame(now) {
   flushProbe();
   adaptScale(now);
   if (scene && (scene.dirty || now - adapt.drawn > REDRAW_MS)) {
+    const t = performance.now();
     scene.render(); adapt.drawn = now; adapt.rendered = true; stamp(live.arrivals.render);
+    stamp(live.costs.render, performance.now() - t);
   }
   plot.draw();
   fpsWindow.frames += 1;
