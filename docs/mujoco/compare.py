@@ -12,8 +12,9 @@ MuJoCo is *not* a dependency of echothigh; this script only needs
 `pip install mujoco numpy` (written against mujoco 4.0.0).
 
     python3 docs/mujoco/compare.py                      # 3 rounds, 1k and 10k
-    python3 docs/mujoco/compare.py --rounds 5 --sizes 1008
-    python3 docs/mujoco/compare.py --write-models       # also writes model_*.xml
+    python3 docs/mujoco/compare.py --rounds 5 --write-models   # as results.json was made
+    python3 docs/mujoco/compare.py --rounds 3 --sizes 1008 --no-contact
+    python3 docs/mujoco/compare.py --stages             # MuJoCo's stage timers only (stages.json)
 
 See README.md in this directory for what the two models share and where they
 differ.
@@ -316,6 +317,29 @@ def mujoco_contact(elastic2d="stretch", solver="Newton", steps=200, tolerance=1e
     }
 
 
+def mujoco_stages(nodes, elastic2d="stretch", tolerance=1e-8):
+    """Where MuJoCo's step spends its time in the press (MuJoCo's own stage
+    timers, wall clock, mean ms per measured step): a separate diagnostic run
+    (`--stages`), not part of the A/B timing."""
+    n_theta, n_z, steps = SIZES[nodes]
+    m = mujoco.MjModel.from_xml_string(mjcf(n_theta, n_z, elastic2d, tolerance=tolerance))
+    anchor_springs(m, sheet(n_theta, n_z)[2])
+    d = mujoco.MjData(m)
+    patch = find_patch(m, d, n_theta, n_z)
+    names = ["STEP", "FORWARD", "POSITION", "POS_KINEMATICS", "VELOCITY", "ACTUATION", "CONSTRAINT", "ADVANCE"]
+    ids = {n: int(getattr(mujoco.mjtTimer, "mjTIMER_" + n)) for n in names}
+    start = None
+    for i in range(WARMUP + steps):
+        if i == WARMUP:
+            start = {n: d.timer[k].duration for n, k in ids.items()}
+        f = 15.0 * 0.5 * (1.0 - math.cos(2 * math.pi * d.time))
+        d.xfrc_applied[patch, 2] = -f / len(patch)
+        mujoco.mj_step(m, d)
+    ms = {n: (d.timer[k].duration - start[n]) / steps * 1e3 for n, k in ids.items()}
+    ms["rest_of_forward (the M+hD+h2K solve)"] = ms["FORWARD"] - ms["POSITION"] - ms["VELOCITY"] - ms["ACTUATION"] - ms["CONSTRAINT"]
+    return {"nodes": nodes, "variant": f"{elastic2d}/tol={tolerance:g}", "ms_per_step": ms}
+
+
 def echothigh(binary, max_nodes, contact_steps=0):
     """One `echothigh bench physics --json` run; its press case at max_nodes
     (and its contact case when contact_steps > 0)."""
@@ -367,8 +391,20 @@ def main():
     ap.add_argument("--no-contact", action="store_true", help="skip the rigid-box contact case (1k)")
     ap.add_argument("--out", default=os.path.join(HERE, "results.json"))
     ap.add_argument("--write-models", action="store_true", help="write model_<nodes>.xml next to this script")
+    ap.add_argument("--stages", action="store_true",
+                    help="only MuJoCo's stage timers in the press (writes stages.json), no A/B")
     args = ap.parse_args()
     sizes = [int(s) for s in args.sizes.split(",")]
+    if args.stages:
+        out = [mujoco_stages(n, mb, float(t)) for n in sizes for mb in args.membranes.split(",")[:1]
+               for t in args.tolerances.split(",")]
+        for o in out:
+            print(o["nodes"], o["variant"], {k: round(v, 3) for k, v in o["ms_per_step"].items()})
+        with open(os.path.join(HERE, "stages.json"), "w") as f:
+            json.dump({"date_utc": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+                       "mujoco_version": mujoco.__version__, "note": "MuJoCo stage timers, wall clock, ms per step",
+                       "stages": out}, f, indent=1)
+        return
     membranes = args.membranes.split(",")
     tolerances = [float(t) for t in args.tolerances.split(",")]
     variants = [(mb, tol) for mb in membranes for tol in tolerances]
