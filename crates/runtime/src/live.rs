@@ -173,6 +173,11 @@ pub struct LiveStatus {
     pub haptic_rate: f64,
     /// Haptic ticks that missed their deadline since start.
     pub missed_deadlines: u64,
+    /// Achieved frames per second of the imaging thread over its last
+    /// second (0 while no page looks); its schedule is
+    /// [`IMAGING_RATE_SETTING`].
+    #[serde(default)]
+    pub imaging_rate: f64,
     /// The haptic thread's scheduling (issue 19: real-time priority where
     /// permitted).
     #[serde(default)]
@@ -215,6 +220,7 @@ impl LiveStatus {
             physics_rate,
             haptic_rate,
             missed_deadlines,
+            imaging_rate,
             model_age,
             mode,
             physics_rate_setting,
@@ -237,6 +243,7 @@ impl LiveStatus {
             physics_rate: finite(physics_rate),
             haptic_rate: finite(haptic_rate),
             missed_deadlines,
+            imaging_rate: finite(imaging_rate),
             model_age: finite(model_age),
             mode,
             physics_rate_setting: finite(physics_rate_setting),
@@ -249,6 +256,9 @@ impl LiveStatus {
         }
     }
 }
+
+/// The live imaging thread's schedule (frames/s) while a page looks.
+pub const IMAGING_RATE_SETTING: f64 = 20.0;
 
 /// `x` if finite, else 0.
 fn finite(x: f64) -> f64 {

@@ -1,9 +1,10 @@
 //! The live system's imaging thread (issue 16/19): it renders only while a
-//! page looks, idles otherwise, and stops and is joined on shutdown. Real
+//! page looks, idles otherwise, reports its achieved rate (issue 19), and
+//! stops and is joined on shutdown. Real
 //! threads on the real clock; only frame counters are asserted, each wait
 //! bounded generously (60 s) so a loaded machine slows the test, not fails it.
 
-use echothigh_runtime::live::{LiveControl, LiveSnapshot};
+use echothigh_runtime::live::{LiveControl, LiveSnapshot, IMAGING_RATE_SETTING};
 use echothigh_runtime::live_system::LiveSystem;
 use echothigh_runtime::scenario::Scenario;
 use std::time::{Duration, Instant};
@@ -34,6 +35,21 @@ fn the_image_is_rendered_only_while_a_page_looks_and_the_thread_joins() {
 
     system.page_opened();
     wait_until("a first frame for the page", || frame(&system) >= 3);
+    // Its achieved rate is reported once a window of ≥ 1 s has passed. The
+    // schedule never bursts to catch up (a late frame starts its period
+    // then), so a window of span T ≥ 1 s holds at most 20 T + 1 frames:
+    // the rate is at most 20 + 1/T ≤ 21 frames/s.
+    let mut snap = LiveSnapshot::default();
+    let rate = |snap: &mut LiveSnapshot| {
+        system.snapshot(snap);
+        snap.status.imaging_rate
+    };
+    wait_until("the imaging rate", || rate(&mut snap) > 0.0);
+    let hz = rate(&mut snap);
+    assert!(
+        hz > 0.0 && hz <= IMAGING_RATE_SETTING + 1.0,
+        "imaging at {hz} frames/s, scheduled {IMAGING_RATE_SETTING}"
+    );
 
     system.page_closed();
     // The frame under way may finish; then the counter stays put.
@@ -49,8 +65,9 @@ fn the_image_is_rendered_only_while_a_page_looks_and_the_thread_joins() {
         last,
         "frames rendered after the page closed"
     );
+    // Idle, it says so: no rate.
+    wait_until("the idle imaging rate", || rate(&mut snap) == 0.0);
 
-    let mut snap = LiveSnapshot::default();
     system.snapshot(&mut snap);
     assert_eq!(snap.fault, None);
     // Joined, with no error; a second shutdown has nothing left to stop.

@@ -179,6 +179,7 @@ impl LiveControl for FakeLive {
             physics_rate: i.rate,
             haptic_rate: 1000.0,
             missed_deadlines: 0,
+            imaging_rate: echothigh_runtime::live::IMAGING_RATE_SETTING,
             haptic_priority: echothigh_runtime::live::HapticPriority::Raised,
             model_age: 0.0,
             mode: i.mode,

@@ -251,6 +251,7 @@ impl LiveSystem {
             section: Mutex::new(None),
             watchers: AtomicUsize::new(0),
             haptic_priority: AtomicU8::new(0),
+            imaging_rate: std::sync::atomic::AtomicU64::new(0),
             fault: Mutex::new(None),
             device: Mutex::new(None),
         });
@@ -535,6 +536,7 @@ impl LiveControl for LiveSystem {
         out.status.haptic_priority = crate::live::HapticPriority::from_code(
             self.shared.haptic_priority.load(Ordering::Relaxed),
         );
+        out.status.imaging_rate = f64::from_bits(self.shared.imaging_rate.load(Ordering::Relaxed));
         out.haptic_device = self.device_status();
         if out.status.mode == Some(CouplingMode::Direct) {
             // The physics steps in the haptic loop: its achieved rate is the

@@ -213,12 +213,17 @@ fn imaging_loop(
     let no_thrombi = Thrombi::default();
     // A fixed-rate schedule: the render's own time does not lengthen the
     // period (a late frame starts the next period now).
-    let period = Duration::from_millis(50);
+    let period = Duration::from_secs_f64(1.0 / crate::live::IMAGING_RATE_SETTING);
     let mut next = Instant::now();
+    // The achieved rate, over windows of at least a second.
+    let (mut window, mut frames) = (Instant::now(), 0u32);
+    let publish_rate = |hz: f64| shared.imaging_rate.store(hz.to_bits(), Ordering::Relaxed);
     while !stop.load(Ordering::Acquire) {
         if shared.watchers.load(Ordering::Acquire) == 0 {
+            publish_rate(0.0);
             std::thread::park_timeout(IDLE_NAP);
             next = Instant::now();
+            (window, frames) = (next, 0);
             continue;
         }
         let v = shared.vein.load(Ordering::Relaxed);
@@ -315,8 +320,14 @@ fn imaging_loop(
                 labels,
             }
         }));
-        next += period;
+        frames += 1;
         let now = Instant::now();
+        let span = now.duration_since(window).as_secs_f64();
+        if span >= 1.0 {
+            publish_rate(f64::from(frames) / span);
+            (window, frames) = (now, 0);
+        }
+        next += period;
         if next > now {
             std::thread::park_timeout(next - now);
         } else {
@@ -403,6 +414,7 @@ mod tests {
             device: Mutex::new(None),
             watchers: AtomicUsize::new(1),
             haptic_priority: AtomicU8::new(0),
+            imaging_rate: std::sync::atomic::AtomicU64::new(0),
             fault: Mutex::new(None),
         });
         // An image of no rows: the scenario loader refuses it, so it is set

@@ -3,7 +3,7 @@
 
 use crate::live::{LiveMesh, LiveSnapshot, SectionReading};
 use echothigh_imaging::{SectionDeformation, VeinState};
-use std::sync::atomic::{AtomicU8, AtomicUsize};
+use std::sync::atomic::{AtomicU64, AtomicU8, AtomicUsize};
 use std::sync::Mutex;
 
 /// Where the hand wants the probe.
@@ -94,6 +94,9 @@ pub(super) struct Shared {
     pub watchers: AtomicUsize,
     /// The haptic thread's scheduling ([`HapticPriority`] as `u8`).
     pub haptic_priority: AtomicU8,
+    /// The imaging thread's achieved frames/s over its last second, as
+    /// `f64` bits (0 while no page looks).
+    pub imaging_rate: AtomicU64,
     /// The last error of a thread of the live system, for the page; cleared
     /// when a new session starts.
     pub fault: Mutex<Option<String>>,

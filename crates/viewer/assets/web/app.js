@@ -3,7 +3,7 @@
 // server's `view/protocol.rs` (JSON envelopes {v, type, ...}; binary frames
 // with a 16-byte header "ETHV", version, kind, a, b).
 import { ThighScene } from './scene.js';
-import { EchoView, ForcePlot, Gauge, drawDepthScale, drawVesselNames, norm, showStatus } from './panels.js';
+import { EchoView, ForcePlot, Gauge, IMAGING_RATE, drawDepthScale, drawVesselNames, norm, showStatus } from './panels.js';
 import { showExam } from './exam.js';
 import { deviceDrives, showDevice } from './device.js';
 import { Guide } from './guide.js';
@@ -244,6 +244,10 @@ function showBehind(s) {
   // Physics: below 80 % of its setting the buffer model ages visibly.
   if (s.physics_rate > 0 && s.physics_rate < 0.8 * s.physics_rate_setting && s.mode !== 'direct') {
     late.push(`tissue simulation at ${s.physics_rate.toFixed(0)} Hz of ${s.physics_rate_setting.toFixed(0)}`);
+  }
+  // The image: below half its schedule the probe's effect shows late.
+  if (s.imaging_rate > 0 && s.imaging_rate < 0.5 * IMAGING_RATE) {
+    late.push(`ultrasound image at ${s.imaging_rate.toFixed(0)} frames/s of ${IMAGING_RATE}`);
   }
   $('behind').hidden = late.length === 0;
   $('behind').textContent = late.length ? `The computer is falling behind: ${late.join(', ')}.` : '';

@@ -254,6 +254,9 @@ const LEVEL_NAMES = {
   below_knee: 'below the knee (outside the model)',
 };
 
+/** The live imaging thread's schedule (frames/s; runtime `IMAGING_RATE_SETTING`). */
+export const IMAGING_RATE = 20;
+
 export function showStatus(s, fps) {
   const set = (id, text) => { document.getElementById(id).textContent = text; };
   set('st-physics', `${s.physics_rate.toFixed(0)} Hz (set ${s.physics_rate_setting.toFixed(0)})`);
@@ -264,7 +267,9 @@ export function showStatus(s, fps) {
   set('st-age', `${(s.model_age * 1000).toFixed(1)} ms`);
   set('st-mode', `${s.mode ?? '–'}${s.latency_setting > 0 ? ` +${(s.latency_setting * 1000).toFixed(0)} ms` : ''}`);
   set('st-time', `${s.time.toFixed(2)} s`);
-  set('st-fps', `${fps.toFixed(0)} frames/s`);
+  // The ultrasound image's achieved rate (issue 19), 0 before its first second.
+  const image = s.imaging_rate > 0 ? `; image ${s.imaging_rate.toFixed(0)} of ${IMAGING_RATE}` : '';
+  set('st-fps', `${fps.toFixed(0)} frames/s${image}`);
   set('st-vein', s.vein ?? 'hidden (exam)');
   set('st-level', s.level ? `${LEVEL_NAMES[s.level] ?? s.level}, ${(s.level_s * 100).toFixed(1)} cm below the groin` : '–');
   // The imaging thread's reading of the section under the probe (issue 13);

@@ -8,7 +8,7 @@ use super::protocol::sample_state;
 /// `msg.type` in `app.js`'s `onJson`, the rest as `s.<key>` in `onState`,
 /// `syncControls` (app.js), `showStatus` (panels.js) and `updateState`
 /// (scene.js).
-const PAGE_STATE_KEYS: [&str; 28] = [
+const PAGE_STATE_KEYS: [&str; 29] = [
     "v",
     "type",
     "time",
@@ -22,6 +22,7 @@ const PAGE_STATE_KEYS: [&str; 28] = [
     "physics_rate",
     "haptic_rate",
     "missed_deadlines",
+    "imaging_rate",
     "haptic_priority",
     "model_age",
     "mode",
@@ -66,6 +67,23 @@ fn state_message_top_level_keys_are_the_ones_the_page_reads() {
     }
 }
 
+/// The page's copy of the imaging thread's schedule (`panels.js`
+/// `IMAGING_RATE`, against which it says the image falls behind) is the
+/// runtime's.
+#[test]
+fn the_pages_imaging_rate_is_the_runtimes() {
+    let panels = crate::assets::ASSETS
+        .iter()
+        .find(|a| a.path.ends_with("panels.js"))
+        .expect("panels.js is embedded");
+    let text = String::from_utf8_lossy(panels.body);
+    let want = format!(
+        "export const IMAGING_RATE = {};",
+        echothigh_runtime::live::IMAGING_RATE_SETTING
+    );
+    assert!(text.contains(&want), "panels.js lacks `{want}`");
+}
+
 #[test]
 fn state_json_is_unchanged_byte_for_byte() {
     // The exact text the page received before `ViewState` flattened
@@ -76,13 +94,14 @@ fn state_json_is_unchanged_byte_for_byte() {
     // issue 14, with its Doppler sites and the score's Doppler part;
     // `haptic_device`, the real device driving the probe, added last for
     // issue 15; `haptic_priority`, the haptic thread's scheduling, for
-    // issue 19 — this golden was updated deliberately for each).
+    // issue 19; `imaging_rate`, the image's achieved frames/s, for issue 19 —
+    // this golden was updated deliberately for each).
     let expected = concat!(
         r#"{"v":1,"type":"state","time":1.25,"probe_position":[0.0,0.07,0.01],"#,
         r#""probe_orientation":[1.0,0.0,0.0,0.0],"device":[0.0,0.0,0.0],"#,
         r#""proxy":[0.0,0.0,0.0],"rendered_force":[0.0,4.5,0.0],"#,
         r#""physics_force":[0.0,4.0,0.1],"max_force":30.0,"physics_rate":98.0,"#,
-        r#""haptic_rate":1000.0,"missed_deadlines":3,"haptic_priority":"normal","model_age":0.012,"mode":"hold","#,
+        r#""haptic_rate":1000.0,"missed_deadlines":3,"imaging_rate":0.0,"haptic_priority":"normal","model_age":0.012,"mode":"hold","#,
         r#""physics_rate_setting":100.0,"latency_setting":0.02,"exam_playing":true,"#,
         r#""level_s":0.2,"level":"femoral_canal","section":null,"#,
         r#""vein":"acute","exam":{"rev":7,"active":true,"trainee":"ada","protocol":"two-point","#,
