@@ -162,8 +162,10 @@ const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
   // the buffer model faded while starved) does not make a release's 0.5 N
   // fall impossible.
   const recent = [];
+  const imagingRates = []; // the server's achieved image frames/s, per state
   const onRecent = (kind, now, d) => {
     if (kind !== 'state') return;
+    if (d.imaging_rate > 0) imagingRates.push(d.imaging_rate);
     recent.push([now, force(d)]);
     while (recent.length && recent[0][0] < now - 400) recent.shift();
   };
@@ -223,6 +225,7 @@ const measureLag = async ({ n, theta, z, throttle, maxStale }) => {
     stale_images: { p50: q(stale, 0.5), max: q(stale, 1) },
     image_arrival_to_drawn: { p50: q(L.costs.image, 0.5), p95: q(L.costs.image, 0.95) },
     render_3d_cost: { p50: q(L.costs.render, 0.5), p95: q(L.costs.render, 0.95) },
+    imaging_rate: { p50: q(imagingRates, 0.5), min: q(imagingRates, 0) },
     frame_p95: q(frames, 0.95), frames: frames.length,
     image_interval_p95: q(imageIntervals, 0.95), images: imageAt.length,
     bytes_per_s: (L.bytes - bytes0) / secs, seconds: secs, misses: misses.slice(0, 10),
@@ -640,7 +643,8 @@ try {
   const ms = (x) => (x === null ? 'n/a' : `${x.toFixed(0)} ms`);
   console.log(`info lag over ${lag.commands} commands (${lag.missed} missed: no state effect within 3 s of simulated time, counted as 3 s, or more than ${MAX_STALE_IMAGES} stale images first; stale images p50 ${lag.stale_images.p50} max ${lag.stale_images.max}): state p50 ${ms(lag.state.p50)} p95 ${ms(lag.state.p95)}, ` +
     `image p50 ${ms(lag.image.p50)} p95 ${ms(lag.image.p95)}; page frames p95 ${ms(lag.frame_p95)}; ${(lag.bytes_per_s / 1000).toFixed(0)} KB/s (${join(shots, 'viewer-lag.json')}); ` +
-    `the page's costs: an image arrival to drawn p50 ${ms(lag.image_arrival_to_drawn.p50)} p95 ${ms(lag.image_arrival_to_drawn.p95)}, one 3D render p50 ${ms(lag.render_3d_cost.p50)} p95 ${ms(lag.render_3d_cost.p95)}`);
+    `the page's costs: an image arrival to drawn p50 ${ms(lag.image_arrival_to_drawn.p50)} p95 ${ms(lag.image_arrival_to_drawn.p95)}, one 3D render p50 ${ms(lag.render_3d_cost.p50)} p95 ${ms(lag.render_3d_cost.p95)}; ` +
+    `the server's image rate p50 ${(lag.imaging_rate.p50 ?? 0).toFixed(1)} min ${(lag.imaging_rate.min ?? 0).toFixed(1)} frames/s`);
   // The wire's budget is 360 KB/s of payload by construction (the server's
   // token bucket, frames.rs), so 400 KB/s holds whatever the machine's load.
   check('bytes per second per tab within the 400 KB/s budget', lag.bytes_per_s <= 400_000,
