@@ -74,6 +74,68 @@ pub struct RankOneTerm {
     pub c: f64,
 }
 
+/// Read access to a vector of 3-vectors by node (array of structures or
+/// structure of arrays), for the kernels shared by both layouts.
+pub trait NodeVectors {
+    /// The value at node `k`.
+    fn at(&self, k: usize) -> Vec3;
+}
+
+/// Accumulating access to a vector of 3-vectors by node.
+pub trait NodeVectorsMut: NodeVectors {
+    /// `self[k] += v`.
+    fn add_at(&mut self, k: usize, v: Vec3);
+}
+
+impl NodeVectors for [Vec3] {
+    #[inline(always)]
+    fn at(&self, k: usize) -> Vec3 {
+        self[k]
+    }
+}
+
+impl NodeVectorsMut for [Vec3] {
+    #[inline(always)]
+    fn add_at(&mut self, k: usize, v: Vec3) {
+        self[k] += v;
+    }
+}
+
+/// `y += Σ_e (E_e x_j at i, E_e x_i at j)` over `edges` and returns their
+/// share of `xᵀ A x`, `Σ 2 x_iᵀ E_e x_j`. Allocates nothing.
+pub fn add_edge_product<X, Y>(edges: &[EdgeTerm], x: &X, y: &mut Y) -> f64
+where
+    X: NodeVectors + ?Sized,
+    Y: NodeVectorsMut + ?Sized,
+{
+    let mut xax = 0.0;
+    // Edges come grouped by their first node (the mesh lists a node's
+    // springs together): row i's sum stays in a register while its
+    // group lasts, so consecutive edges do not wait on each other's
+    // store to y[i], and the group's share of xᵀAx is 2 x_iᵀ Σ E x_j.
+    let mut row = usize::MAX;
+    let (mut xi, mut acc) = (Vec3::zeros(), Vec3::zeros());
+    for e in edges {
+        let (i, j) = (e.i as usize, e.j as usize);
+        if i != row {
+            if row != usize::MAX {
+                y.add_at(row, acc);
+                xax += 2.0 * xi.dot(&acc);
+            }
+            row = i;
+            xi = x.at(i);
+            acc = Vec3::zeros();
+        }
+        acc += e.apply(&x.at(j));
+        y.add_at(j, e.apply(&xi));
+    }
+    if row != usize::MAX {
+        y.add_at(row, acc);
+        xax += 2.0 * xi.dot(&acc);
+    }
+    xax
+}
+
 /// The edge-form matrix of `n` nodes (see the module docs).
 #[derive(Debug, Clone)]
 pub struct EdgeMatrix {
@@ -271,40 +333,27 @@ impl EdgeMatrix {
     /// side terms (the off-diagonal part; `D` is applied by the caller, in
     /// its node pass). Allocates nothing.
     pub fn add_off_diagonal_product(&self, x: &[Vec3], y: &mut [Vec3]) -> f64 {
+        add_edge_product(&self.edges, x, y) + self.add_coupling_product(x, y)
+    }
+
+    /// `y += C x` and returns `xᵀ C x` for `C` the rank-one and side terms
+    /// alone (off-diagonal blocks; the SIMD kernels apply the springs
+    /// themselves). Allocates nothing.
+    pub fn add_coupling_product<X, Y>(&self, x: &X, y: &mut Y) -> f64
+    where
+        X: NodeVectors + ?Sized,
+        Y: NodeVectorsMut + ?Sized,
+    {
         let mut xax = 0.0;
-        // Edges come grouped by their first node (the mesh lists a node's
-        // springs together): row i's sum stays in a register while its
-        // group lasts, so consecutive edges do not wait on each other's
-        // store to y[i], and the group's share of xᵀAx is 2 x_iᵀ Σ E x_j.
-        let mut row = usize::MAX;
-        let (mut xi, mut acc) = (Vec3::zeros(), Vec3::zeros());
-        for e in &self.edges {
-            let (i, j) = (e.i as usize, e.j as usize);
-            if i != row {
-                if row != usize::MAX {
-                    y[row] += acc;
-                    xax += 2.0 * xi.dot(&acc);
-                }
-                row = i;
-                xi = x[i];
-                acc = Vec3::zeros();
-            }
-            acc += e.apply(&x[j]);
-            y[j] += e.apply(&xi);
-        }
-        if row != usize::MAX {
-            y[row] += acc;
-            xax += 2.0 * xi.dot(&acc);
-        }
         for t in &self.rank_one {
             let k = Vec3::from(t.k);
-            let kx = t.nodes.map(|m| k.dot(&x[m as usize]));
+            let kx = t.nodes.map(|m| k.dot(&x.at(m as usize)));
             let s = t.w[0] * kx[0] + t.w[1] * kx[1] + t.w[2] * kx[2];
-            for r in 0..3 {
+            for (r, &kxr) in kx.iter().enumerate() {
                 // Row r, off-diagonal: c w_r k Σ_{n≠r} w_n k·x_n.
-                let off = s - t.w[r] * kx[r];
-                y[t.nodes[r] as usize] += k * (t.c * t.w[r] * off);
-                xax += t.c * t.w[r] * kx[r] * off;
+                let off = s - t.w[r] * kxr;
+                y.add_at(t.nodes[r] as usize, k * (t.c * t.w[r] * off));
+                xax += t.c * t.w[r] * kxr * off;
             }
         }
         if self.side_active {
@@ -313,10 +362,10 @@ impl EdgeMatrix {
                 let (cols, blocks) = self.side.row(i);
                 let mut acc = Vec3::zeros();
                 for (&j, m) in cols.iter().zip(blocks) {
-                    acc += m * x[j];
+                    acc += m * x.at(j);
                 }
-                y[i] += acc;
-                xax += x[i].dot(&acc);
+                y.add_at(i, acc);
+                xax += x.at(i).dot(&acc);
             }
         }
         xax
