@@ -10,7 +10,8 @@
 //!    terms one by one ([`add_edge_product`], [`EdgeMatrix::add_coupling_product`]);
 //! 3. nodes: `x += α p`, `r −= α q`, `z = P⁻¹ r`, `rᵀ r`, `rᵀ z` ([`update`]).
 
-use crate::edge_matrix::{add_edge_product, EdgeMatrix};
+use crate::edge_matrix::EdgeMatrix;
+use crate::node_vectors::add_edge_product;
 use crate::pcg::{block_jacobi_inverse, PcgParams, Preconditioner, SolveStats};
 use crate::stencil::{Soa3, StencilLayout, StencilMatrix};
 use crate::stencil_kernels::{stencil_product, update, update_direction, Update};
@@ -74,7 +75,11 @@ impl SimdPcg {
 
     /// `q = A p`, returning `pᵀ A p`.
     fn product(&mut self, a: &EdgeMatrix) -> f64 {
-        let mut quad = stencil_product(self.arch, &self.m, &self.p, &mut self.q);
+        let classes = match a.stencil() {
+            Some(own) if self.m.external => own,
+            _ => &self.m.classes[..],
+        };
+        let mut quad = stencil_product(self.arch, &self.m, classes, &self.p, &mut self.q);
         quad += add_edge_product(&self.m.leftover, &self.p, &mut self.q);
         quad + a.add_coupling_product(&self.p, &mut self.q)
     }
@@ -205,7 +210,7 @@ impl SimdPcg {
     }
 
     fn q_at(&self, k: usize) -> Vec3 {
-        use crate::edge_matrix::NodeVectors;
+        use crate::node_vectors::NodeVectors;
         self.q.at(k)
     }
 }

@@ -22,7 +22,8 @@
 //! shifted reads never leave it and every chunk is full.
 
 use crate::block_sparse::BlockSparse;
-use crate::edge_matrix::{EdgeMatrix, EdgeTerm, NodeVectors, NodeVectorsMut};
+use crate::edge_matrix::{EdgeMatrix, EdgeTerm};
+use crate::node_vectors::{NodeVectors, NodeVectorsMut};
 use crate::Vec3;
 
 /// Most offset classes a layout keeps (the grid has six).
@@ -184,6 +185,56 @@ pub struct StencilClass {
     pub q: Vec<f64>,
 }
 
+impl StencilClass {
+    /// Zeroed classes of `layout` (allocates).
+    pub fn for_layout(layout: &StencilLayout) -> Vec<StencilClass> {
+        let z = vec![0.0; layout.len()];
+        layout
+            .offsets()
+            .iter()
+            .map(|&offset| StencilClass {
+                offset,
+                d: [z.clone(), z.clone(), z.clone()],
+                p: z.clone(),
+                q: z.clone(),
+            })
+            .collect()
+    }
+
+    /// The springs held (slots with `p` or `q` nonzero) as edge terms.
+    pub fn terms<'a>(&'a self, layout: &'a StencilLayout) -> impl Iterator<Item = EdgeTerm> + 'a {
+        let pad = layout.pad();
+        (0..layout.n().saturating_sub(self.offset))
+            .filter(move |&k| self.p[pad + k] != 0.0 || self.q[pad + k] != 0.0)
+            .map(move |k| EdgeTerm {
+                i: k as u32,
+                j: (k + self.offset) as u32,
+                d: [self.d[0][pad + k], self.d[1][pad + k], self.d[2][pad + k]],
+                p: self.p[pad + k],
+                q: self.q[pad + k],
+            })
+    }
+
+    /// `y += (this class's springs) x` one by one (scalar; tests and the
+    /// scalar kernels), returning their share of `xᵀ A x`.
+    pub fn add_product<X, Y>(&self, layout: &StencilLayout, x: &X, y: &mut Y) -> f64
+    where
+        X: NodeVectors + ?Sized,
+        Y: NodeVectorsMut + ?Sized,
+    {
+        let mut xax = 0.0;
+        for e in self.terms(layout) {
+            let (i, j) = (e.i as usize, e.j as usize);
+            let (xi, xj) = (x.at(i), x.at(j));
+            let ej = e.apply(&xj);
+            y.add_at(i, ej);
+            y.add_at(j, e.apply(&xi));
+            xax += 2.0 * xi.dot(&ej);
+        }
+        xax
+    }
+}
+
 /// The edge-form matrix repacked for the SIMD kernels: the diagonal blocks
 /// as nine arrays (entry `(r, c)` in `diag[3 r + c]`), the classes, and the
 /// springs left over; [`EdgeMatrix`] keeps its rank-one terms and side
@@ -197,6 +248,9 @@ pub struct StencilMatrix {
     pub classes: Vec<StencilClass>,
     /// Springs in no class slot.
     pub leftover: Vec<EdgeTerm>,
+    /// True if the classes to use are the matrix's own ([`EdgeMatrix::stencil`]),
+    /// not [`Self::classes`].
+    pub external: bool,
 }
 
 impl StencilMatrix {
@@ -206,16 +260,8 @@ impl StencilMatrix {
         let z = vec![0.0; layout.len()];
         StencilMatrix {
             diag: std::array::from_fn(|_| z.clone()),
-            classes: layout
-                .offsets()
-                .iter()
-                .map(|&offset| StencilClass {
-                    offset,
-                    d: [z.clone(), z.clone(), z.clone()],
-                    p: z.clone(),
-                    q: z.clone(),
-                })
-                .collect(),
+            classes: StencilClass::for_layout(layout),
+            external: false,
             leftover: Vec::with_capacity(capacity),
             layout: layout.clone(),
         }
@@ -242,11 +288,17 @@ impl StencilMatrix {
                 }
             }
         }
+        self.leftover.clear();
+        self.external = a.stencil().is_some();
+        if self.external {
+            // The springs are in the matrix's classes already.
+            self.leftover.extend_from_slice(a.edges());
+            return;
+        }
         for class in &mut self.classes {
             class.p.fill(0.0);
             class.q.fill(0.0);
         }
-        self.leftover.clear();
         for e in a.edges() {
             let slot = self.layout.slot(e.i as usize, e.j as usize);
             match slot {

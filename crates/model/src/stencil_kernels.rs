@@ -6,26 +6,12 @@
 //! once instead of twice: results differ from the scalar path by rounding
 //! only (the tests bound it by `γ_T`, Higham §3.1).
 
-use crate::stencil::{Soa3, StencilMatrix, CHUNK, MAX_CLASSES};
+// Component and lane loops index several arrays at once.
+#![allow(clippy::needless_range_loop)]
+
+use crate::simd::{view, view_mut};
+use crate::stencil::{Soa3, StencilClass, StencilMatrix, CHUNK, MAX_CLASSES};
 use pulp::{Simd, WithSimd};
-
-/// The `chunks` SIMD vectors of the padded range `[pad, pad + rounded)`
-/// of the nodes shifted by `shift` nodes (`|shift| ≤ pad`).
-#[inline(always)]
-fn view<S: Simd>(v: &[f64], pad: usize, rounded: usize, shift: isize, chunks: usize) -> &[S::f64s] {
-    let start = (pad as isize + shift) as usize;
-    let (head, tail) = S::as_simd_f64s(&v[start..start + rounded]);
-    debug_assert!(tail.is_empty());
-    &head[..chunks]
-}
-
-/// As [`view`], mutable and unshifted.
-#[inline(always)]
-fn view_mut<S: Simd>(v: &mut [f64], pad: usize, rounded: usize, chunks: usize) -> &mut [S::f64s] {
-    let (head, tail) = S::as_mut_simd_f64s(&mut v[pad..pad + rounded]);
-    debug_assert!(tail.is_empty());
-    &mut head[..chunks]
-}
 
 /// `E u` accumulated into `acc`: `acc += p (d·u) d + q u`, `E = p d dᵀ + q I`.
 #[inline(always)]
@@ -61,6 +47,7 @@ struct ClassView<'a, S: Simd> {
 /// `y = (D + stencil) x` over all nodes, returning `xᵀ (D + stencil) x`.
 struct Product<'a> {
     m: &'a StencilMatrix,
+    classes: &'a [StencilClass],
     x: &'a Soa3,
     y: &'a mut Soa3,
 }
@@ -83,8 +70,8 @@ impl<'a> WithSimd for Product<'a> {
             x_fwd: [empty; 3],
             x_bwd: [empty; 3],
         });
-        let nc = self.m.classes.len();
-        for (v, c) in views.iter_mut().zip(&self.m.classes) {
+        let nc = self.classes.len();
+        for (v, c) in views.iter_mut().zip(self.classes) {
             let o = c.offset as isize;
             let arrays = [&c.d[0], &c.d[1], &c.d[2], &c.p, &c.q];
             v.fwd = arrays.map(|a| at(a, 0));
@@ -141,12 +128,19 @@ impl<'a> WithSimd for Product<'a> {
     }
 }
 
-/// `y = (D + stencil) x` (the diagonal blocks and the classes; not the
-/// leftovers), returning `xᵀ (D + stencil) x`. `x`'s padding must be zero;
-/// `y`'s padding is left as it was. Allocates nothing.
-pub fn stencil_product(arch: pulp::Arch, m: &StencilMatrix, x: &Soa3, y: &mut Soa3) -> f64 {
+/// `y = (D + stencil) x` (`m`'s diagonal blocks and `classes`, of `m`'s
+/// layout; not the leftovers), returning `xᵀ (D + stencil) x`. `x`'s
+/// padding must be zero; `y`'s padding is left as it was. Allocates nothing.
+pub fn stencil_product(
+    arch: pulp::Arch,
+    m: &StencilMatrix,
+    classes: &[StencilClass],
+    x: &Soa3,
+    y: &mut Soa3,
+) -> f64 {
     debug_assert_eq!(m.layout().rounded() % CHUNK, 0);
-    arch.dispatch(Product { m, x, y })
+    debug_assert!(classes.len() <= MAX_CLASSES);
+    arch.dispatch(Product { m, classes, x, y })
 }
 
 /// `p = z + β p` over the nodes.

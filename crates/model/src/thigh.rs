@@ -220,6 +220,7 @@ impl ThighModel {
     /// the previous implementation, for same-run comparisons and tests).
     pub fn set_kernels(&mut self, kernels: Kernels) {
         self.integrator.set_kernels(kernels);
+        self.tissue.set_kernels(kernels);
     }
 
     /// Back to rest: rest positions, zero velocities, zero external forces, time 0.

@@ -13,11 +13,14 @@ use crate::block_sparse::BlockSparse;
 use crate::config::TissueParams;
 use crate::edge_matrix::EdgeMatrix;
 use crate::force_model::{ForceModel, JacobianScratch};
+use crate::integrator::Kernels;
 use crate::mesh::{EdgeKind, SurfaceMesh};
 use crate::springs::{
     damper_force, damper_jacobian, linear_force, normal_energy, normal_force, normal_stiffness,
     spring_force, spring_force_jacobian,
 };
+use crate::stencil::StencilLayout;
+use crate::tissue_simd::{NormalSpec, SpringSpec, TissueStencil};
 use crate::Vec3;
 use nalgebra::Matrix3;
 
@@ -62,6 +65,9 @@ pub struct TissueForces {
     /// the step limiter reads, apart from the 248-byte spring.
     limits: Vec<(Vec3, f64)>,
     geometric_in_compression: bool,
+    /// The springs on the grid stencil, for [`Kernels::Simd`].
+    stencil: TissueStencil,
+    kernels: Kernels,
 }
 
 impl TissueForces {
@@ -144,12 +150,48 @@ impl TissueForces {
             })
             .collect::<Vec<NormalSpring>>();
         debug_assert!(normals.iter().enumerate().all(|(k, s)| s.node == k));
+        let springs: Vec<LinearSpring> = springs;
+        let specs: Vec<SpringSpec> = springs
+            .iter()
+            .map(|s| (s.i, s.j, s.rest, s.a, s.c))
+            .collect();
+        let normal_specs: Vec<NormalSpec> = normals
+            .iter()
+            .map(|s| {
+                let phi = mesh.stiffness_factors()[s.node];
+                NormalSpec {
+                    anchor: s.anchor,
+                    rest: s.rest,
+                    a: s.a,
+                    b: s.b,
+                    c: s.c,
+                    n0: mesh.rest_normals()[s.node],
+                    kt: phi * params.tangential_stiffness * areas[s.node],
+                    ct: phi * params.tangential_damping * areas[s.node],
+                    x_rest: s.rest_position,
+                }
+            })
+            .collect();
+        let stencil =
+            TissueStencil::new(&StencilLayout::from_pattern(pattern), &specs, &normal_specs);
         TissueForces {
             springs,
             limits: normals.iter().map(|s| (s.anchor, s.min_length)).collect(),
             normals,
             geometric_in_compression,
+            stencil,
+            kernels: Kernels::default(),
         }
+    }
+
+    /// The kernels of forces and assembly ([`Kernels::Simd`] unless set).
+    pub fn kernels(&self) -> Kernels {
+        self.kernels
+    }
+
+    /// Chooses the kernels of forces and assembly (no allocation).
+    pub fn set_kernels(&mut self, kernels: Kernels) {
+        self.kernels = kernels;
     }
 
     /// Whether compressed springs' geometric stiffness goes into `K`.
@@ -231,6 +273,43 @@ impl TissueForces {
     }
 }
 
+/// Force on node `i` of a linear spring and its damper (N):
+/// `f_i = (a e + c ė) d`, spring and damper along the same direction
+/// (zero for a spring of zero length).
+#[inline(always)]
+fn linear_spring_force(s: &LinearSpring, x: &[Vec3], v: &[Vec3]) -> Vec3 {
+    let delta = x[s.j] - x[s.i];
+    let l = delta.norm();
+    if l <= f64::MIN_POSITIVE {
+        return Vec3::zeros();
+    }
+    let rate = (v[s.j] - v[s.i]).dot(&delta) / l;
+    delta * ((linear_force(s.a, l - s.rest) + s.c * rate) / l)
+}
+
+/// Adds a linear spring's edge term `α S + β c d dᵀ` to `a`:
+/// `p = α (a − g) + β c`, `q = α g`, `g = f/l` (0 in compression unless `geo`).
+#[inline(always)]
+fn add_spring_term(
+    s: &LinearSpring,
+    x: &[Vec3],
+    (alpha, beta, geo): (f64, f64, bool),
+    a: &mut EdgeMatrix,
+) {
+    let delta = x[s.j] - x[s.i];
+    let l = delta.norm();
+    if l <= f64::MIN_POSITIVE {
+        return;
+    }
+    let d = delta / l;
+    let f = linear_force(s.a, l - s.rest);
+    let g = if f < 0.0 && !geo { 0.0 } else { f / l };
+    let p = alpha * (s.a - g) + beta * s.c;
+    // (i, j) is a mesh edge, in the side matrix's pattern.
+    let written = a.add_spring(s.i, s.j, &d, p, alpha * g);
+    debug_assert!(written.is_ok());
+}
+
 /// Largest `α ∈ [0, 1]` with `|p + s d| ≥ l_min` for all `s ∈ [0, α]`.
 fn path_fraction(p: &Vec3, d: &Vec3, l_min: f64) -> f64 {
     let dd = d.norm_squared();
@@ -256,6 +335,16 @@ fn path_fraction(p: &Vec3, d: &Vec3, l_min: f64) -> f64 {
 
 impl ForceModel for TissueForces {
     fn add_forces(&mut self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
+        if self.kernels == Kernels::Simd {
+            self.stencil.add_forces(x, v, f);
+            for &e in self.stencil.leftover() {
+                let s = &self.springs[e];
+                let fi = linear_spring_force(s, x, v);
+                f[s.i] += fi;
+                f[s.j] -= fi;
+            }
+            return;
+        }
         // The mesh lists a node's springs together: node i's force stays
         // in a register while its group lasts (no store-to-load chain).
         let mut row = usize::MAX;
@@ -268,14 +357,7 @@ impl ForceModel for TissueForces {
                 row = s.i;
                 acc = Vec3::zeros();
             }
-            // f_i = (a e + c ė) d: spring and damper along the same direction.
-            let delta = x[s.j] - x[s.i];
-            let l = delta.norm();
-            if l <= f64::MIN_POSITIVE {
-                continue;
-            }
-            let rate = (v[s.j] - v[s.i]).dot(&delta) / l;
-            let fi = delta * ((linear_force(s.a, l - s.rest) + s.c * rate) / l);
+            let fi = linear_spring_force(s, x, v);
             acc += fi;
             f[s.j] -= fi;
         }
@@ -344,19 +426,16 @@ impl ForceModel for TissueForces {
         _scratch: &mut JacobianScratch,
     ) {
         let geo = self.geometric_in_compression;
-        for s in &self.springs {
-            let delta = x[s.j] - x[s.i];
-            let l = delta.norm();
-            if l <= f64::MIN_POSITIVE {
-                continue;
+        if self.kernels == Kernels::Simd && a.stencil_layout() == self.stencil.layout() {
+            let (classes, diag) = a.stencil_mut();
+            self.stencil.assemble(x, (alpha, beta, geo), classes, diag);
+            for &e in self.stencil.leftover() {
+                add_spring_term(&self.springs[e], x, (alpha, beta, geo), a);
             }
-            let d = delta / l;
-            let f = linear_force(s.a, l - s.rest);
-            let g = if f < 0.0 && !geo { 0.0 } else { f / l };
-            let p = alpha * (s.a - g) + beta * s.c;
-            // (i, j) is a mesh edge, in the side matrix's pattern.
-            let written = a.add_spring(s.i, s.j, &d, p, alpha * g);
-            debug_assert!(written.is_ok());
+            return;
+        }
+        for s in &self.springs {
+            add_spring_term(s, x, (alpha, beta, geo), a);
         }
         for s in &self.normals {
             let law = |e| (normal_force(s.a, s.b, e), normal_stiffness(s.a, s.b, e));
