@@ -34,6 +34,7 @@ pub mod simd_pcg;
 pub mod springs;
 pub mod stencil;
 pub mod stencil_kernels;
+pub mod stencil_setup;
 pub mod thigh;
 pub mod timings;
 pub mod tissue;

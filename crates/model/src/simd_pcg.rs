@@ -12,11 +12,11 @@
 
 use crate::edge_matrix::EdgeMatrix;
 use crate::node_vectors::add_edge_product;
-use crate::pcg::{block_jacobi_inverse, PcgParams, Preconditioner, SolveStats};
+use crate::pcg::{PcgParams, Preconditioner, SolveStats};
 use crate::stencil::{Soa3, StencilLayout, StencilMatrix};
 use crate::stencil_kernels::{stencil_product, update, update_direction, Update};
+use crate::stencil_setup::{start, Start};
 use crate::Vec3;
-use nalgebra::Matrix3;
 
 /// Scratch memory and the repacked matrix of the SIMD conjugate gradient.
 #[derive(Debug, Clone)]
@@ -115,33 +115,21 @@ impl SimdPcg {
         self.product(a);
         std::mem::swap(&mut self.x, &mut self.p);
         self.p.clear();
-        let (mut b2, mut rr, mut rz) = (0.0, 0.0, 0.0);
-        for k in 0..n {
-            let inv = if fixed[k] {
-                Matrix3::zeros()
-            } else if jacobi {
-                block_jacobi_inverse(&a.diagonal()[k])
-            } else {
-                Matrix3::identity()
-            };
-            for r in 0..3 {
-                for c in 0..3 {
-                    self.inv[3 * r + c][pad + k] = inv[(r, c)];
-                }
-            }
-            let (mut r, mut z) = (Vec3::zeros(), Vec3::zeros());
-            if !fixed[k] {
-                r = b[k] - self.q_at(k);
-                z = inv * r;
-                b2 += b[k].norm_squared();
-                rr += r.norm_squared();
-                rz += r.dot(&z);
-            }
-            for c in 0..3 {
-                self.r.c[c][pad + k] = r[c];
-                self.z.c[c][pad + k] = z[c];
-            }
-        }
+        self.r.load(b);
+        let (b2, rr, rz) = start(
+            self.arch,
+            Start {
+                pad,
+                rounded: self.m.layout().rounded(),
+                jacobi,
+                diag: &self.m.diag,
+                free: &self.free,
+                q: &self.q,
+                r: &mut self.r,
+                z: &mut self.z,
+                inv: &mut self.inv,
+            },
+        );
         let b_norm = b2.sqrt();
         if b_norm == 0.0 {
             x.fill(Vec3::zeros());
@@ -207,10 +195,5 @@ impl SimdPcg {
             beta = rz_new / rz;
             rz = rz_new;
         }
-    }
-
-    fn q_at(&self, k: usize) -> Vec3 {
-        use crate::node_vectors::NodeVectors;
-        self.q.at(k)
     }
 }
