@@ -106,7 +106,7 @@ fn report(
     max_gap: f64,
 ) -> CompareReport {
     let steps = new.cpu.len();
-    let mut median = |v: &mut Vec<f64>| {
+    let median = |v: &mut Vec<f64>| {
         v.sort_by(f64::total_cmp);
         percentile(v, 0.5)
     };
