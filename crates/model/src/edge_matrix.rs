@@ -22,6 +22,8 @@
 //! rank-one and side terms: the product reads 48 bytes per edge.
 
 use crate::block_sparse::{BlockSparse, PatternError};
+use crate::node_vectors::{add_edge_product, NodeVectors, NodeVectorsMut};
+use crate::stencil::{StencilClass, StencilLayout};
 use crate::Vec3;
 use nalgebra::Matrix3;
 
@@ -79,6 +81,9 @@ pub struct RankOneTerm {
 pub struct EdgeMatrix {
     diag: Vec<Matrix3<f64>>,
     edges: Vec<EdgeTerm>,
+    layout: StencilLayout,
+    stencil: Vec<StencilClass>,
+    stencil_active: bool,
     rank_one: Vec<RankOneTerm>,
     side: BlockSparse,
     side_active: bool,
@@ -94,9 +99,13 @@ impl EdgeMatrix {
         let n = pattern.n();
         let mut side = pattern.clone();
         side.clear();
+        let layout = StencilLayout::from_pattern(pattern);
         EdgeMatrix {
             diag: vec![Matrix3::zeros(); n],
             edges: Vec::with_capacity((pattern.nnz_blocks() - n) / 2),
+            stencil: StencilClass::for_layout(&layout),
+            layout,
+            stencil_active: false,
             rank_one: Vec::with_capacity(rank_one_capacity),
             side,
             side_active: false,
@@ -122,6 +131,26 @@ impl EdgeMatrix {
         self.edges.clear();
         self.rank_one.clear();
         self.side_active = false;
+        self.stencil_active = false;
+    }
+
+    /// The grid stencil's layout (the classes of [`Self::stencil_mut`]).
+    pub fn stencil_layout(&self) -> &StencilLayout {
+        &self.layout
+    }
+
+    /// The stencil classes and the diagonal blocks, for a force model that
+    /// writes its springs by class (the SIMD tissue): from this call to the
+    /// next [`Self::begin`] the classes are part of the matrix, and the
+    /// caller must write every slot (zero where it has no spring).
+    pub fn stencil_mut(&mut self) -> (&mut [StencilClass], &mut [Matrix3<f64>]) {
+        self.stencil_active = true;
+        (&mut self.stencil, &mut self.diag)
+    }
+
+    /// The stencil classes, if a model wrote them during this assembly.
+    pub fn stencil(&self) -> Option<&[StencilClass]> {
+        self.stencil_active.then_some(&self.stencil[..])
     }
 
     /// Adds `block` to the diagonal block of node `i`.
@@ -271,40 +300,33 @@ impl EdgeMatrix {
     /// side terms (the off-diagonal part; `D` is applied by the caller, in
     /// its node pass). Allocates nothing.
     pub fn add_off_diagonal_product(&self, x: &[Vec3], y: &mut [Vec3]) -> f64 {
-        let mut xax = 0.0;
-        // Edges come grouped by their first node (the mesh lists a node's
-        // springs together): row i's sum stays in a register while its
-        // group lasts, so consecutive edges do not wait on each other's
-        // store to y[i], and the group's share of xᵀAx is 2 x_iᵀ Σ E x_j.
-        let mut row = usize::MAX;
-        let (mut xi, mut acc) = (Vec3::zeros(), Vec3::zeros());
-        for e in &self.edges {
-            let (i, j) = (e.i as usize, e.j as usize);
-            if i != row {
-                if row != usize::MAX {
-                    y[row] += acc;
-                    xax += 2.0 * xi.dot(&acc);
-                }
-                row = i;
-                xi = x[i];
-                acc = Vec3::zeros();
+        let mut xax = add_edge_product(&self.edges, x, y) + self.add_coupling_product(x, y);
+        if let Some(classes) = self.stencil() {
+            for c in classes {
+                xax += c.add_product(&self.layout, x, y);
             }
-            acc += e.apply(&x[j]);
-            y[j] += e.apply(&xi);
         }
-        if row != usize::MAX {
-            y[row] += acc;
-            xax += 2.0 * xi.dot(&acc);
-        }
+        xax
+    }
+
+    /// `y += C x` and returns `xᵀ C x` for `C` the rank-one and side terms
+    /// alone (off-diagonal blocks; the SIMD kernels apply the springs
+    /// themselves). Allocates nothing.
+    pub fn add_coupling_product<X, Y>(&self, x: &X, y: &mut Y) -> f64
+    where
+        X: NodeVectors + ?Sized,
+        Y: NodeVectorsMut + ?Sized,
+    {
+        let mut xax = 0.0;
         for t in &self.rank_one {
             let k = Vec3::from(t.k);
-            let kx = t.nodes.map(|m| k.dot(&x[m as usize]));
+            let kx = t.nodes.map(|m| k.dot(&x.at(m as usize)));
             let s = t.w[0] * kx[0] + t.w[1] * kx[1] + t.w[2] * kx[2];
-            for r in 0..3 {
+            for (r, &kxr) in kx.iter().enumerate() {
                 // Row r, off-diagonal: c w_r k Σ_{n≠r} w_n k·x_n.
-                let off = s - t.w[r] * kx[r];
-                y[t.nodes[r] as usize] += k * (t.c * t.w[r] * off);
-                xax += t.c * t.w[r] * kx[r] * off;
+                let off = s - t.w[r] * kxr;
+                y.add_at(t.nodes[r] as usize, k * (t.c * t.w[r] * off));
+                xax += t.c * t.w[r] * kxr * off;
             }
         }
         if self.side_active {
@@ -313,10 +335,10 @@ impl EdgeMatrix {
                 let (cols, blocks) = self.side.row(i);
                 let mut acc = Vec3::zeros();
                 for (&j, m) in cols.iter().zip(blocks) {
-                    acc += m * x[j];
+                    acc += m * x.at(j);
                 }
-                y[i] += acc;
-                xax += x[i].dot(&acc);
+                y.add_at(i, acc);
+                xax += x.at(i).dot(&acc);
             }
         }
         xax
@@ -342,7 +364,12 @@ impl EdgeMatrix {
         for (i, d) in self.diag.iter().enumerate() {
             a.add_diagonal(i, d);
         }
-        for e in &self.edges {
+        let stencil_edges = self
+            .stencil()
+            .into_iter()
+            .flatten()
+            .flat_map(|c| c.terms(&self.layout));
+        for e in self.edges.iter().copied().chain(stencil_edges) {
             let b = e.block();
             a.add_block(e.i as usize, e.j as usize, &b)?;
             a.add_block(e.j as usize, e.i as usize, &b)?;

@@ -53,6 +53,8 @@ use crate::edge_matrix::EdgeMatrix;
 use crate::edge_pcg::EdgePcg;
 use crate::force_model::{ForceModel, JacobianScratch};
 use crate::pcg::{Pcg, PcgParams, SolveStats};
+use crate::simd_pcg::SimdPcg;
+use crate::stencil::StencilLayout;
 use crate::timings::{seconds_since, StepTimings};
 use crate::Vec3;
 use serde::{Deserialize, Serialize};
@@ -95,6 +97,20 @@ pub enum SystemForm {
     BlockSparse,
 }
 
+/// Which kernels the edge-form system runs on (issue 18).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Kernels {
+    /// Four-lane SIMD with FMA over structure-of-arrays data
+    /// ([`SimdPcg`]; `pulp` picks AVX2 + FMA at run time, else scalar
+    /// code of the same order). The default.
+    #[default]
+    Simd,
+    /// The scalar array-of-structures code ([`EdgePcg`]): the previous
+    /// implementation, kept for same-run comparisons and tests.
+    Scalar,
+}
+
 /// The mutable state and the constant data of a system being stepped.
 pub struct Dynamics<'a> {
     /// Positions (m), updated in place.
@@ -115,11 +131,13 @@ pub struct Dynamics<'a> {
 #[derive(Debug, Clone)]
 pub struct ImplicitEuler {
     form: SystemForm,
+    kernels: Kernels,
     scratch: JacobianScratch,
     a: BlockSparse,
     pcg: Pcg,
     edge: EdgeMatrix,
     edge_pcg: EdgePcg,
+    simd_pcg: SimdPcg,
     x0: Vec<Vec3>,
     v0: Vec<Vec3>,
     dv: Vec<Vec3>,
@@ -152,9 +170,14 @@ impl ImplicitEuler {
         let vecs = || vec![Vec3::zeros(); n];
         ImplicitEuler {
             form: SystemForm::Edge,
+            kernels: Kernels::default(),
             a: scratch.k.clone(),
             edge: EdgeMatrix::new(pattern, n),
             edge_pcg: EdgePcg::new(n),
+            simd_pcg: SimdPcg::new(
+                &StencilLayout::from_pattern(pattern),
+                (pattern.nnz_blocks() - n) / 2,
+            ),
             scratch,
             pcg: Pcg::new(n),
             x0: vecs(),
@@ -180,6 +203,16 @@ impl ImplicitEuler {
     /// next assembly; no allocation).
     pub fn set_system_form(&mut self, form: SystemForm) {
         self.form = form;
+    }
+
+    /// The kernels of the edge-form system.
+    pub fn kernels(&self) -> Kernels {
+        self.kernels
+    }
+
+    /// Chooses the kernels of the edge-form system (no allocation).
+    pub fn set_kernels(&mut self, kernels: Kernels) {
+        self.kernels = kernels;
     }
 
     /// Forgets the warm start (after a reset of the state).
@@ -393,12 +426,16 @@ impl ImplicitEuler {
 
     /// Solves the assembled system (of the current form) for `delta`, right-hand side `r`.
     fn solve_assembled(&mut self, fixed: &[bool], pcg: &PcgParams) -> SolveStats {
-        match self.form {
-            SystemForm::Edge => {
+        match (self.form, self.kernels) {
+            (SystemForm::Edge, Kernels::Simd) => {
+                self.simd_pcg
+                    .solve(&self.edge, &self.r, &mut self.delta, fixed, pcg)
+            }
+            (SystemForm::Edge, Kernels::Scalar) => {
                 self.edge_pcg
                     .solve(&self.edge, &self.r, &mut self.delta, fixed, pcg)
             }
-            SystemForm::BlockSparse => {
+            (SystemForm::BlockSparse, _) => {
                 self.pcg
                     .solve(&self.a, &self.r, &mut self.delta, fixed, pcg)
             }
@@ -467,7 +504,10 @@ impl ImplicitEuler {
                     &mut self.scratch,
                 );
                 self.edge.finish();
-                self.edge_pcg.solve(&self.edge, rhs, out, fixed, &pcg)
+                match self.kernels {
+                    Kernels::Simd => self.simd_pcg.solve(&self.edge, rhs, out, fixed, &pcg),
+                    Kernels::Scalar => self.edge_pcg.solve(&self.edge, rhs, out, fixed, &pcg),
+                }
             }
             SystemForm::BlockSparse => {
                 self.a.clear();

@@ -27,11 +27,18 @@ pub mod force_model;
 pub mod integrator;
 pub mod leg;
 pub mod mesh;
+pub mod node_vectors;
 pub mod pcg;
+pub mod simd;
+pub mod simd_pcg;
 pub mod springs;
+pub mod stencil;
+pub mod stencil_kernels;
+pub mod stencil_setup;
 pub mod thigh;
 pub mod timings;
 pub mod tissue;
+pub mod tissue_simd;
 
 /// A 3-vector of `f64` (m, m/s or N by context).
 pub type Vec3 = nalgebra::Vector3<f64>;
@@ -42,10 +49,13 @@ pub use config::{ConfigError, IntegratorParams, ModelConfig, ThighGeometry, Tiss
 pub use edge_matrix::{EdgeMatrix, EdgeTerm, RankOneTerm};
 pub use edge_pcg::EdgePcg;
 pub use force_model::{ForceModel, JacobianScratch, NoExtraForce, SumForce};
-pub use integrator::{Dynamics, ImplicitEuler, StepStats, SystemForm};
+pub use integrator::{Dynamics, ImplicitEuler, Kernels, StepStats, SystemForm};
 pub use leg::{HandTarget, LegNode, LegSurface};
 pub use mesh::{Edge, EdgeKind, SurfaceMesh};
+pub use node_vectors::{NodeVectors, NodeVectorsMut};
 pub use pcg::{Pcg, PcgParams, Preconditioner, SolveStats};
+pub use simd_pcg::SimdPcg;
+pub use stencil::{Soa3, StencilLayout, StencilMatrix};
 pub use thigh::{Energy, ThighModel};
 pub use timings::StepTimings;
 pub use tissue::TissueForces;

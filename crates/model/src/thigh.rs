@@ -5,7 +5,7 @@
 use crate::block_sparse::BlockSparse;
 use crate::config::{ConfigError, ModelConfig};
 use crate::force_model::{ForceModel, SumForce};
-use crate::integrator::{filter, Dynamics, ImplicitEuler, StepStats, SystemForm};
+use crate::integrator::{filter, Dynamics, ImplicitEuler, Kernels, StepStats, SystemForm};
 use crate::mesh::SurfaceMesh;
 use crate::pcg::SolveStats;
 use crate::tissue::TissueForces;
@@ -209,6 +209,18 @@ impl ThighModel {
     /// same-run comparisons and tests).
     pub fn set_system_form(&mut self, form: SystemForm) {
         self.integrator.set_system_form(form);
+    }
+
+    /// The kernels of the edge-form system ([`Kernels::Simd`] unless set).
+    pub fn kernels(&self) -> Kernels {
+        self.integrator.kernels()
+    }
+
+    /// Chooses the kernels of the edge-form system ([`Kernels::Scalar`] is
+    /// the previous implementation, for same-run comparisons and tests).
+    pub fn set_kernels(&mut self, kernels: Kernels) {
+        self.integrator.set_kernels(kernels);
+        self.tissue.set_kernels(kernels);
     }
 
     /// Back to rest: rest positions, zero velocities, zero external forces, time 0.

@@ -23,11 +23,14 @@ use crate::block_sparse::BlockSparse;
 use crate::config::TissueParams;
 use crate::edge_matrix::EdgeMatrix;
 use crate::force_model::{ForceModel, JacobianScratch};
+use crate::integrator::Kernels;
 use crate::mesh::{EdgeKind, SurfaceMesh};
 use crate::springs::{
     damper_jacobian, linear_force, normal_energy, normal_force, normal_stiffness,
     spring_force_jacobian,
 };
+use crate::stencil::StencilLayout;
+use crate::tissue_simd::{NormalSpec, SpringSpec, TissueStencil};
 use crate::Vec3;
 use nalgebra::Matrix3;
 
@@ -109,6 +112,9 @@ pub struct TissueForces {
     /// `rest − (1 − margin) b/a`. The 32 bytes the step limiter reads.
     limits: Vec<(Vec3, f64)>,
     geometric_in_compression: bool,
+    /// The springs on the grid stencil, for [`Kernels::Simd`].
+    stencil: TissueStencil,
+    kernels: Kernels,
 }
 
 impl TissueForces {
@@ -167,12 +173,9 @@ impl TissueForces {
                 // p(x) = φ (x/λ) / (normal_a (x/λ) + normal_b), i.e. the
                 // reference law at the same strain (a = normal_a/(φA),
                 // b = λ normal_b/(φA), asymptote λ b/a < L). The shear tie
-                // scales by φ only, not by 1/λ as a layer's G/L would: it is
-                // what keeps a compressed normal spring from buckling
-                // sideways (its geometric stiffness −|f|/l), and the
-                // calibrated value is the least that does (TissueParams);
-                // weaker, a 50 N press on a 62 mm layer slid the node
-                // around its anchor.
+                // scales by φ only, not by 1/λ as a layer's G/L would: its
+                // calibrated value keeps the pressed skin from sliding
+                // sideways (TissueParams), whatever the layer's thickness.
                 let (lambda, phi) = (mesh.layer_scales()[k], mesh.stiffness_factors()[k]);
                 let asymptote = lambda * params.asymptote();
                 let shear = phi;
@@ -195,13 +198,46 @@ impl TissueForces {
             .collect::<Vec<_>>();
         debug_assert!(normals.iter().enumerate().all(|(k, (s, _))| s.node == k));
         let limits = normals.iter().map(|(_, l)| *l).collect();
-        let normals = normals.into_iter().map(|(s, _)| s).collect();
+        let normals: Vec<NormalSpring> = normals.into_iter().map(|(s, _)| s).collect();
+        let springs: Vec<LinearSpring> = springs;
+        let specs: Vec<SpringSpec> = springs
+            .iter()
+            .map(|s| (s.i, s.j, s.rest, s.a, s.c))
+            .collect();
+        let normal_specs: Vec<NormalSpec> = normals
+            .iter()
+            .map(|s| NormalSpec {
+                anchor: s.anchor,
+                rest: s.rest,
+                a: s.a,
+                b: s.b,
+                c: s.c,
+                n0: s.normal,
+                kt: s.tangential_k,
+                ct: s.tangential_c,
+                x_rest: s.rest_position,
+            })
+            .collect();
+        let stencil =
+            TissueStencil::new(&StencilLayout::from_pattern(pattern), &specs, &normal_specs);
         TissueForces {
             springs,
             limits,
             normals,
             geometric_in_compression,
+            stencil,
+            kernels: Kernels::default(),
         }
+    }
+
+    /// The kernels of forces and assembly ([`Kernels::Simd`] unless set).
+    pub fn kernels(&self) -> Kernels {
+        self.kernels
+    }
+
+    /// Chooses the kernels of forces and assembly (no allocation).
+    pub fn set_kernels(&mut self, kernels: Kernels) {
+        self.kernels = kernels;
     }
 
     /// Whether compressed springs' geometric stiffness goes into `K`.
@@ -284,6 +320,43 @@ impl TissueForces {
     }
 }
 
+/// Force on node `i` of a linear spring and its damper (N):
+/// `f_i = (a e + c ė) d`, spring and damper along the same direction
+/// (zero for a spring of zero length).
+#[inline(always)]
+fn linear_spring_force(s: &LinearSpring, x: &[Vec3], v: &[Vec3]) -> Vec3 {
+    let delta = x[s.j] - x[s.i];
+    let l = delta.norm();
+    if l <= f64::MIN_POSITIVE {
+        return Vec3::zeros();
+    }
+    let rate = (v[s.j] - v[s.i]).dot(&delta) / l;
+    delta * ((linear_force(s.a, l - s.rest) + s.c * rate) / l)
+}
+
+/// Adds a linear spring's edge term `α S + β c d dᵀ` to `a`:
+/// `p = α (a − g) + β c`, `q = α g`, `g = f/l` (0 in compression unless `geo`).
+#[inline(always)]
+fn add_spring_term(
+    s: &LinearSpring,
+    x: &[Vec3],
+    (alpha, beta, geo): (f64, f64, bool),
+    a: &mut EdgeMatrix,
+) {
+    let delta = x[s.j] - x[s.i];
+    let l = delta.norm();
+    if l <= f64::MIN_POSITIVE {
+        return;
+    }
+    let d = delta / l;
+    let f = linear_force(s.a, l - s.rest);
+    let g = if f < 0.0 && !geo { 0.0 } else { f / l };
+    let p = alpha * (s.a - g) + beta * s.c;
+    // (i, j) is a mesh edge, in the side matrix's pattern.
+    let written = a.add_spring(s.i, s.j, &d, p, alpha * g);
+    debug_assert!(written.is_ok());
+}
+
 /// Largest `α ∈ [0, 1]` with `n·(x + s dx) ≥ h_min` for all `s ∈ [0, α]`
 /// (the column's height stays above its limit; linear in `s`).
 #[inline]
@@ -301,6 +374,16 @@ fn path_fraction(n: &Vec3, h_min: f64, x: &Vec3, dx: &Vec3) -> f64 {
 
 impl ForceModel for TissueForces {
     fn add_forces(&mut self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
+        if self.kernels == Kernels::Simd {
+            self.stencil.add_forces(x, v, f);
+            for &e in self.stencil.leftover() {
+                let s = &self.springs[e];
+                let fi = linear_spring_force(s, x, v);
+                f[s.i] += fi;
+                f[s.j] -= fi;
+            }
+            return;
+        }
         // The mesh lists a node's springs together: node i's force stays
         // in a register while its group lasts (no store-to-load chain).
         let mut row = usize::MAX;
@@ -313,14 +396,7 @@ impl ForceModel for TissueForces {
                 row = s.i;
                 acc = Vec3::zeros();
             }
-            // f_i = (a e + c ė) d: spring and damper along the same direction.
-            let delta = x[s.j] - x[s.i];
-            let l = delta.norm();
-            if l <= f64::MIN_POSITIVE {
-                continue;
-            }
-            let rate = (v[s.j] - v[s.i]).dot(&delta) / l;
-            let fi = delta * ((linear_force(s.a, l - s.rest) + s.c * rate) / l);
+            let fi = linear_spring_force(s, x, v);
             acc += fi;
             f[s.j] -= fi;
         }
@@ -381,19 +457,16 @@ impl ForceModel for TissueForces {
         _scratch: &mut JacobianScratch,
     ) {
         let geo = self.geometric_in_compression;
-        for s in &self.springs {
-            let delta = x[s.j] - x[s.i];
-            let l = delta.norm();
-            if l <= f64::MIN_POSITIVE {
-                continue;
+        if self.kernels == Kernels::Simd && a.stencil_layout() == self.stencil.layout() {
+            let (classes, diag) = a.stencil_mut();
+            self.stencil.assemble(x, (alpha, beta, geo), classes, diag);
+            for &e in self.stencil.leftover() {
+                add_spring_term(&self.springs[e], x, (alpha, beta, geo), a);
             }
-            let d = delta / l;
-            let f = linear_force(s.a, l - s.rest);
-            let g = if f < 0.0 && !geo { 0.0 } else { f / l };
-            let p = alpha * (s.a - g) + beta * s.c;
-            // (i, j) is a mesh edge, in the side matrix's pattern.
-            let written = a.add_spring(s.i, s.j, &d, p, alpha * g);
-            debug_assert!(written.is_ok());
+            return;
+        }
+        for s in &self.springs {
+            add_spring_term(s, x, (alpha, beta, geo), a);
         }
         for s in &self.normals {
             let block = s.block(s.scaled_block(&x[s.node], alpha, beta));

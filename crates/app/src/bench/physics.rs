@@ -8,8 +8,9 @@
 //! case also reports the median time of each stage of the step
 //! (`stage_median_s`: `echothigh_model::StepTimings`, monotonic clock).
 //!
-//! `--compare` runs instead the same-run A/B of the edge-form system
-//! against the block-sparse reference (issue 18; see
+//! `--compare` runs instead the same-run A/B of the default system (edge
+//! form, SIMD kernels) against a baseline (`--baseline scalar`: the scalar
+//! kernels; `block-sparse`: the block-sparse reference; issue 18, see
 //! [`super::physics_compare`]): the press case at each size and the
 //! contact case with its queries, reporting the ratio of the medians.
 
@@ -43,10 +44,15 @@ pub struct Args {
     /// average-female, obese; issue 12) instead of the elliptic cylinder.
     #[arg(long)]
     patient: Option<String>,
-    /// Same-run A/B instead: the block-sparse reference against the edge
-    /// form, interleaved, medians of thread CPU time and their ratio.
+    /// Same-run A/B instead: a baseline (`--baseline`) against the default
+    /// system, interleaved, medians of thread CPU time and their ratio.
     #[arg(long)]
     compare: bool,
+    /// The baseline of `--compare`: the scalar kernels of the edge form
+    /// (the implementation before the SIMD kernels) or the block-sparse
+    /// reference.
+    #[arg(long, value_enum, default_value = "scalar")]
+    baseline: super::physics_compare::Baseline,
 }
 
 /// Runs the benchmark, prints the table on stderr, writes/prints the JSON.
@@ -132,22 +138,27 @@ fn run_compare(args: &Args) -> anyhow::Result<()> {
     };
     for &(nt, nz, steps) in SIZES.iter().filter(|(nt, nz, _)| nt * nz <= args.max_nodes) {
         let steps = ((steps as f64 * args.steps_scale).round() as usize).max(1);
-        let r = compare_press(nt, nz, steps, args.warmup)
+        let r = compare_press(nt, nz, steps, args.warmup, args.baseline)
             .with_context(|| format!("building the {nt}×{nz} mesh"))?;
         print(&r);
         cases.push(r);
     }
     if args.contact_steps > 0 {
-        let r = compare_contact(args.contact_steps)?;
+        let r = compare_contact(args.contact_steps, args.baseline)?;
         print(&r);
+        if let Some([[ns, nq], [os, oq]]) = r.step_and_queries_cpu_median_us {
+            eprintln!(
+                "contact CPU medians µs: new step {ns:.1} + queries {nq:.1}, old step {os:.1} + queries {oq:.1}"
+            );
+        }
         cases.push(r);
     }
     let json = serde_json::json!({
         "bench": "physics_compare",
         "profile": if cfg!(debug_assertions) { "debug" } else { "release" },
         "threads": 1,
-        "old": "block_sparse",
-        "new": "edge",
+        "old": args.baseline,
+        "new": "edge_simd",
         "cases": cases,
     });
     let text = serde_json::to_string_pretty(&json)?;

@@ -1,7 +1,9 @@
-//! `echothigh bench physics --compare`: a same-run A/B of the Newton
-//! systems (issue 18): the block-sparse reference (`old`,
-//! [`SystemForm::BlockSparse`]) against the edge form (`new`,
-//! [`SystemForm::Edge`]). Two identical models take the same steps,
+//! `echothigh bench physics --compare`: a same-run A/B of the physics step
+//! (issue 18): the default system (`new`: the edge form on SIMD kernels,
+//! [`Kernels::Simd`]) against a baseline (`old`): the same edge form on the
+//! previous scalar kernels ([`Baseline::Scalar`], [`Kernels::Scalar`]) or
+//! the block-sparse reference ([`Baseline::BlockSparse`],
+//! [`SystemForm::BlockSparse`]). Two identical models take the same steps,
 //! interleaved step by step (the order alternating, old–new then new–old,
 //! so neither always runs on a warmer cache), each step timed in the
 //! thread's CPU time; the report gives both medians, their ratio, and the
@@ -12,9 +14,31 @@ use super::clock::{percentile, thread_cpu_us};
 use super::physics_cases::{apply_patch_load, case_model, probe_patch, stage_medians, Scenario};
 use echothigh_contact::{ContactParams, Probe, ProbeContact};
 use echothigh_model::{
-    ConfigError, ModelConfig, NoExtraForce, StepStats, StepTimings, SystemForm, ThighModel, Vec3,
+    ConfigError, Kernels, ModelConfig, NoExtraForce, StepStats, StepTimings, SystemForm,
+    ThighModel, Vec3,
 };
 use serde::Serialize;
+
+/// What the default system is compared against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum Baseline {
+    /// The edge form on the scalar kernels (the implementation before the
+    /// SIMD kernels).
+    Scalar,
+    /// The block-sparse matrix and its PCG (the reference before the edge form).
+    BlockSparse,
+}
+
+impl Baseline {
+    /// Sets `model` up as this baseline.
+    pub fn apply(self, model: &mut ThighModel) {
+        match self {
+            Baseline::Scalar => model.set_kernels(Kernels::Scalar),
+            Baseline::BlockSparse => model.set_system_form(SystemForm::BlockSparse),
+        }
+    }
+}
 
 /// One A/B case.
 #[derive(Debug, Clone, Serialize)]
@@ -26,21 +50,25 @@ pub struct CompareReport {
     pub nodes: usize,
     /// Measured steps of each form.
     pub steps: usize,
-    /// Median thread CPU time per step of the block-sparse reference (µs).
+    /// Median thread CPU time per step of the baseline (µs; with the
+    /// contact case, the step plus its queries).
     pub old_cpu_median_us: f64,
-    /// Median thread CPU time per step of the edge form (µs).
+    /// Median thread CPU time per step of the default system (µs).
     pub new_cpu_median_us: f64,
     /// `old / new` of the medians: the speed-up.
     pub ratio: f64,
-    /// Steps per second of CPU time of the edge form, `1e6 / median`.
+    /// Steps per second of CPU time of the default system, `1e6 / median`.
     pub new_cpu_steps_per_s: f64,
-    /// Per-stage medians of the edge form (s, monotonic clock).
+    /// Contact case: median thread CPU time of the physics step alone and
+    /// of the haptic queries alone, default system then baseline (µs).
+    pub step_and_queries_cpu_median_us: Option<[[f64; 2]; 2]>,
+    /// Per-stage medians of the default system (s, monotonic clock).
     pub new_stage_median_s: StepTimings,
-    /// Per-stage medians of the reference (s, monotonic clock).
+    /// Per-stage medians of the baseline (s, monotonic clock).
     pub old_stage_median_s: StepTimings,
     /// Largest `|x_new − x_old|∞` over nodes and steps (m).
     pub max_position_gap_m: f64,
-    /// Mean PCG iterations per step, edge form / reference.
+    /// Mean PCG iterations per step, default system / baseline.
     pub cg_iterations_mean: [f64; 2],
 }
 
@@ -48,6 +76,8 @@ pub struct CompareReport {
 #[derive(Default)]
 struct Side {
     cpu: Vec<f64>,
+    step_cpu: Vec<f64>,
+    query_cpu: Vec<f64>,
     stages: Vec<StepTimings>,
     cg: u64,
 }
@@ -76,9 +106,17 @@ fn report(
     max_gap: f64,
 ) -> CompareReport {
     let steps = new.cpu.len();
-    new.cpu.sort_by(f64::total_cmp);
-    old.cpu.sort_by(f64::total_cmp);
-    let (n, o) = (percentile(&new.cpu, 0.5), percentile(&old.cpu, 0.5));
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        percentile(v, 0.5)
+    };
+    let (n, o) = (median(&mut new.cpu), median(&mut old.cpu));
+    let split = (!new.step_cpu.is_empty()).then(|| {
+        [
+            [median(&mut new.step_cpu), median(&mut new.query_cpu)],
+            [median(&mut old.step_cpu), median(&mut old.query_cpu)],
+        ]
+    });
     CompareReport {
         case,
         nodes,
@@ -87,6 +125,7 @@ fn report(
         new_cpu_median_us: n,
         ratio: if n > 0.0 { o / n } else { 0.0 },
         new_cpu_steps_per_s: if n > 0.0 { 1e6 / n } else { 0.0 },
+        step_and_queries_cpu_median_us: split,
         new_stage_median_s: stage_medians(&new.stages),
         old_stage_median_s: stage_medians(&old.stages),
         max_position_gap_m: max_gap,
@@ -97,18 +136,19 @@ fn report(
     }
 }
 
-/// The press scenario on an `n_θ × n_z` mesh, both forms interleaved.
+/// The press scenario on an `n_θ × n_z` mesh, both systems interleaved.
 pub fn compare_press(
     n_theta: usize,
     n_z: usize,
     steps: usize,
     warmup: usize,
+    baseline: Baseline,
 ) -> Result<CompareReport, ConfigError> {
     let mut models = [
         case_model(Scenario::Press, n_theta, n_z)?,
         case_model(Scenario::Press, n_theta, n_z)?,
     ];
-    models[1].set_system_form(SystemForm::BlockSparse);
+    baseline.apply(&mut models[1]);
     let h = models[0].config().integrator.time_step;
     let patch = probe_patch(&models[0]);
     let mut sides = [Side::default(), Side::default()];
@@ -137,14 +177,14 @@ pub fn compare_press(
 }
 
 /// The default mesh with the probe pressed 10 mm (after a 0.5 s ramp) and
-/// the haptic queries after every step, both forms interleaved; the time
-/// of a step is the physics step plus its queries.
-pub fn compare_contact(steps: usize) -> anyhow::Result<CompareReport> {
+/// the haptic queries after every step, both systems interleaved; the
+/// time of a step is the physics step plus its queries (each also apart).
+pub fn compare_contact(steps: usize, baseline: Baseline) -> anyhow::Result<CompareReport> {
     let config = ModelConfig::default();
     let h = config.integrator.time_step;
     let top = config.thigh.semi_axis_y;
     let mut models = [ThighModel::new(&config)?, ThighModel::new(&config)?];
-    models[1].set_system_form(SystemForm::BlockSparse);
+    baseline.apply(&mut models[1]);
     let mut contacts = [
         ProbeContact::new(&models[0], Probe::default(), ContactParams::default())?,
         ProbeContact::new(&models[1], Probe::default(), ContactParams::default())?,
@@ -157,11 +197,17 @@ pub fn compare_contact(steps: usize) -> anyhow::Result<CompareReport> {
         let depth = 0.010 * (i.min(ramp) as f64 / ramp as f64);
         let order = if i % 2 == 0 { [0, 1] } else { [1, 0] };
         for k in order {
+            // ProbeContact::step is advance then sample, timed apart.
             let c0 = thread_cpu_us();
-            let s = contacts[k].step(&mut models[k], &pose(depth), h);
-            let us = thread_cpu_us() - c0;
+            let (mut s, _) = contacts[k].advance(&mut models[k], &pose(depth), h);
+            let c1 = thread_cpu_us();
+            let (_, query) = contacts[k].sample(&mut models[k]);
+            let c2 = thread_cpu_us();
+            s.timings.accumulate(&query.timings);
             if i > ramp {
-                sides[k].record(us, &s.physics);
+                sides[k].record(c2 - c0, &s);
+                sides[k].step_cpu.push(c1 - c0);
+                sides[k].query_cpu.push(c2 - c1);
             }
         }
         max_gap = max_gap.max(gap(&models[0], &models[1]));
