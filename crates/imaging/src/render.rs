@@ -134,6 +134,8 @@ pub struct Renderer {
     rf: Vec<[f32; 2]>,
     iq: Vec<[f32; 2]>,
     gray: Vec<u8>,
+    /// One column's round-trip loss exponents (Np), for the compression.
+    loss_scratch: Vec<f64>,
     geometry: FrameGeometry,
     /// Factor on the studied vein's (vessel 0's) lumen height: its
     /// Valsalva distension (issue 17), 1 at rest.
@@ -319,6 +321,7 @@ impl Renderer {
             rf: vec![[0.0; 2]; bins * padded_rows],
             iq: vec![[0.0; 2]; cfg.columns * cfg.rows],
             gray: vec![0; cfg.columns * cfg.rows],
+            loss_scratch: vec![0.0; cfg.rows],
             field,
             vein_distension: 1.0,
         }
@@ -598,6 +601,7 @@ impl Renderer {
                 &self.warps[b],
                 iq,
                 &adds.column(j),
+                &mut self.loss_scratch,
                 col,
             );
         }

@@ -70,16 +70,21 @@ pub(crate) fn splat_column(
             break; // depths are sorted and the map is increasing
         }
         let fl = r.floor();
-        let q = (((r - fl) * AXIAL_SUBSTEPS as f64) as usize).min(AXIAL_SUBSTEPS - 1);
+        // r − fl ∈ [0, 1) and −K − 1 ≤ fl < rows + K: the plain conversions
+        // through i32 give what the saturating ones to usize/i64 would.
+        let q = (((r - fl) * AXIAL_SUBSTEPS as f64) as i32 as usize).min(AXIAL_SUBSTEPS - 1);
         let p = t.phase[((z * t.phase_per_metre) as i64 & (PHASE_STEPS as i64 - 1)) as usize];
-        let e = elev[(fl as i64 + g.pad as i64).clamp(0, last) as usize];
+        let fi = fl as i32 as i64;
+        let e = elev[(fi + g.pad as i64).clamp(0, last) as usize];
         let c = [
             e * (a[0] * p[0] - a[1] * p[1]),
             e * (a[0] * p[1] + a[1] * p[0]),
         ];
         // First tap: row fl − K + 1, at index fl − K + 1 + pad ≥ 0.
-        let first = (fl as i64 - k as i64 + 1 + g.pad as i64) as usize;
-        let base = (ax.knot(r) * AXIAL_SUBSTEPS + q) * taps;
+        let first = (fi - k as i64 + 1 + g.pad as i64) as usize;
+        // `ax.knot(r)` from its table (no division).
+        let knot = ax.row_knot[fi.max(0) as usize] as usize;
+        let base = (knot * AXIAL_SUBSTEPS + q) * taps;
         let w = &ax.taps[base..base + taps];
         for (o, wk) in out[first..first + taps].iter_mut().zip(w) {
             o[0] += c[0] * wk[0] - c[1] * wk[1];
@@ -167,7 +172,9 @@ pub(crate) struct LogCompression {
 }
 
 /// Round-trip attenuation, added clutter and noise, TGC along one column,
-/// and the log compression of its envelope into `gray`.
+/// and the log compression of its envelope into `gray`; `scratch` (at
+/// least `gray.len()` values) holds the column's loss exponents between
+/// the serial walk down the segments and the per-pixel pass.
 ///
 /// The received echo at image depth `z` is `(iq + clutter) · 10^{−A/20} + noise`,
 /// `A = 2 f ∫₀^z α(z') dz'` dB, displayed with the TGC gain `2 f α_TGC z` dB;
@@ -187,8 +194,10 @@ pub(crate) fn compress_column(
     warps: &WarpSet,
     iq: &[[f32; 2]],
     add: &Additive,
+    scratch: &mut [f64],
     gray: &mut [u8],
 ) {
+    let loss_np = &mut scratch[..gray.len()];
     // Breakpoints mapped to image depth (m, cm) and the slope after each.
     let mut z = [0.0f64; MAX_BREAKPOINTS + 1];
     let mut alpha = [0.0f64; MAX_BREAKPOINTS + 1];
@@ -220,7 +229,9 @@ pub(crate) fn compress_column(
         seg += 1;
     }
     let db_to_np = std::f64::consts::LN_10 / 20.0;
-    for (i, (px, out)) in iq.iter().zip(gray.iter_mut()).enumerate() {
+    // Pass 1 (serial: the segments): the round-trip loss exponent `−2 f A`
+    // (Np) of each row.
+    for (i, x) in loss_np.iter_mut().enumerate() {
         let zi = (i as f64 + 0.5) * g.dz;
         while seg < n && z[seg] <= zi {
             acc += slope * (z[seg] - z_at) * 100.0;
@@ -229,7 +240,13 @@ pub(crate) fn compress_column(
             seg += 1;
         }
         let att = acc + slope * (zi - z_at) * 100.0;
-        let loss = (-2.0 * lc.f_mhz * att * db_to_np).exp() as f32;
+        *x = -2.0 * lc.f_mhz * att * db_to_np;
+    }
+    // Pass 2 (independent pixels, which the compiler may take several at a
+    // time): loss, clutter and noise, TGC, log compression.
+    for (i, ((px, out), &x)) in iq.iter().zip(gray.iter_mut()).zip(&*loss_np).enumerate() {
+        let zi = (i as f64 + 0.5) * g.dz;
+        let loss = x.exp() as f32;
         let gain = 2.0 * lc.f_mhz * lc.tgc * zi * 100.0;
         let (c, ca, nz) = (add.clutter[i], add.clutter_amp[i], add.noise[i]);
         let re = (px[0] + ca * c[0]) * loss + add.noise_amp * nz[0];
