@@ -534,7 +534,7 @@ impl Renderer {
             unsafe { self.stages_avx2(out) };
             return Ok(());
         }
-        self.stages(out);
+        self.stages::<false>(out);
         Ok(())
     }
 
@@ -544,13 +544,15 @@ impl Renderer {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn stages_avx2(&mut self, out: &mut [u8]) {
-        self.stages(out);
+        self.stages::<true>(out);
     }
 
     /// Stages 2–4 of a frame after [`Renderer::prepare`]: splat, lateral
-    /// convolution, compression and the transpose into `out`.
+    /// convolution, compression and the transpose into `out`. `AVX2`: called
+    /// from [`Renderer::stages_avx2`] (the splat's taps take AVX2
+    /// instructions; the same floats).
     #[inline(always)]
-    fn stages(&mut self, out: &mut [u8]) {
+    fn stages<const AVX2: bool>(&mut self, out: &mut [u8]) {
         let (t, g, f, pr) = (&*self.tables, &self.geometry, &self.field, self.padded_rows);
         let elev = if f.points {
             &t.elev_point[..]
@@ -560,7 +562,7 @@ impl Renderer {
         let w0 = self.window_start(self.pan_columns);
         for (b, col) in self.rf.chunks_mut(pr).enumerate() {
             let r = f.bin_start[w0 + b] as usize..f.bin_start[w0 + b + 1] as usize;
-            splat_column(
+            splat_column::<AVX2>(
                 t,
                 g,
                 elev,
