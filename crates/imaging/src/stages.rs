@@ -31,10 +31,18 @@ pub(crate) fn image_depth(g: &FrameGeometry, surface: f64, warps: &WarpSet, dept
     column_depth(surface, g.bone, d) - g.face
 }
 
+/// Scatterers whose setup [`splat_column`] computes together: two AVX2
+/// registers of f64 lanes, on the stack (nothing allocated per frame).
+const SPLAT_BATCH: usize = 8;
+
 /// Adds the axial PSF of each scatterer of one bin into its padded column
 /// `out` (`rows + 2·pad` complex samples, cleared first), weighted by the
-/// elevation weight `elev` of its splat row (`row + pad`). `AVX2`: the
-/// caller runs with AVX2 enabled (see [`add_taps`]).
+/// elevation weight `elev` of its splat row (`row + pad`). The per-scatterer
+/// setup (depth through the deformation, row, sub-row, phase) is computed
+/// [`SPLAT_BATCH`] scatterers at a time, then their taps are added one
+/// scatterer after the other: the same float operations per scatterer, in
+/// the same order into `out`. `AVX2`: the caller runs with AVX2 enabled
+/// (see [`add_taps`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn splat_column<const AVX2: bool>(
@@ -56,41 +64,65 @@ pub(crate) fn splat_column<const AVX2: bool>(
     let highest = (g.rows + k) as f64;
     let any_warp = warps.is_active();
     let last = elev.len() as i64 - 1;
-    for (&d, a) in depth.iter().zip(amp) {
-        let d = d as f64;
-        let z = if any_warp {
-            image_depth(g, surface, warps, d)
+    let phase_mask = PHASE_STEPS as i32 - 1;
+    for (ds, amps) in depth.chunks(SPLAT_BATCH).zip(amp.chunks(SPLAT_BATCH)) {
+        // Setup of the batch, lane by lane without branches (the compiler
+        // takes several lanes per instruction): image depth, fractional row,
+        // its floor, sub-row and phase index. Lanes past the batch's end, and
+        // lanes the loop below skips or stops at, are computed for nothing.
+        let mut z = [0.0f64; SPLAT_BATCH];
+        if any_warp {
+            for (zk, &d) in z.iter_mut().zip(ds) {
+                *zk = image_depth(g, surface, warps, d as f64);
+            }
         } else {
-            column_depth(surface, g.bone, d) - g.face
-        };
-        let r = z * inv_dz - 0.5;
-        if r < lowest {
-            continue;
+            for (zk, &d) in z.iter_mut().zip(ds) {
+                *zk = column_depth(surface, g.bone, d as f64) - g.face;
+            }
         }
-        if r >= highest {
-            break; // depths are sorted and the map is increasing
+        let mut r = [0.0f64; SPLAT_BATCH];
+        let mut fl = [0i32; SPLAT_BATCH];
+        let mut q = [0i32; SPLAT_BATCH];
+        let mut ph = [0i32; SPLAT_BATCH];
+        for l in 0..SPLAT_BATCH {
+            let rl = z[l] * inv_dz - 0.5;
+            let f = rl.floor();
+            r[l] = rl;
+            // For a splatted scatterer r − fl ∈ [0, 1) and −K − 1 ≤ fl <
+            // rows + K: the conversions through i32 give what the saturating
+            // ones to usize/i64 would, and clamping the sub-row at 63 before
+            // the truncation gives what clamping after it would.
+            q[l] = ((rl - f) * AXIAL_SUBSTEPS as f64).min((AXIAL_SUBSTEPS - 1) as f64) as i32;
+            fl[l] = f as i32;
+            // |z · 2k₀/2π · 4096| < 2³¹ for |z| < 53 m: the i32 truncation
+            // is the i64 one, and its low 12 bits the same.
+            ph[l] = (z[l] * t.phase_per_metre) as i32 & phase_mask;
         }
-        let fl = r.floor();
-        // r − fl ∈ [0, 1) and −K − 1 ≤ fl < rows + K: the plain conversions
-        // through i32 give what the saturating ones to usize/i64 would.
-        let q = (((r - fl) * AXIAL_SUBSTEPS as f64) as i32 as usize).min(AXIAL_SUBSTEPS - 1);
-        let p = t.phase[((z * t.phase_per_metre) as i64 & (PHASE_STEPS as i64 - 1)) as usize];
-        let fi = fl as i32 as i64;
-        let e = elev[(fi + g.pad as i64).clamp(0, last) as usize];
-        let c = [
-            e * (a[0] * p[0] - a[1] * p[1]),
-            e * (a[0] * p[1] + a[1] * p[0]),
-        ];
-        // First tap: row fl − K + 1, at index fl − K + 1 + pad ≥ 0.
-        let first = (fi - k as i64 + 1 + g.pad as i64) as usize;
-        // `ax.knot(r)` from its table (no division).
-        let knot = ax.row_knot[fi.max(0) as usize] as usize;
-        let base = (knot * AXIAL_SUBSTEPS + q) * taps;
-        add_taps::<AVX2>(
-            &mut out[first..first + taps],
-            &ax.taps[base..base + taps],
-            c,
-        );
+        for (l, a) in amps.iter().enumerate() {
+            if r[l] < lowest {
+                continue;
+            }
+            if r[l] >= highest {
+                return; // depths are sorted and the map is increasing
+            }
+            let p = t.phase[ph[l] as usize];
+            let fi = fl[l] as i64;
+            let e = elev[(fi + g.pad as i64).clamp(0, last) as usize];
+            let c = [
+                e * (a[0] * p[0] - a[1] * p[1]),
+                e * (a[0] * p[1] + a[1] * p[0]),
+            ];
+            // First tap: row fl − K + 1, at index fl − K + 1 + pad ≥ 0.
+            let first = (fi - k as i64 + 1 + g.pad as i64) as usize;
+            // `ax.knot(r)` from its table (no division).
+            let knot = ax.row_knot[fi.max(0) as usize] as usize;
+            let base = (knot * AXIAL_SUBSTEPS + q[l] as usize) * taps;
+            add_taps::<AVX2>(
+                &mut out[first..first + taps],
+                &ax.taps[base..base + taps],
+                c,
+            );
+        }
     }
 }
 
