@@ -150,6 +150,9 @@ pub(crate) struct AxialTables {
     pub taps: Vec<[f32; 2]>,
     /// `∫ |p|² dΔ` at each knot (m).
     pub energy: Vec<f64>,
+    /// [`knot`](Self::knot) of rows `0 .. rows + K` (the splat's reach)
+    /// as a table: `row_knot[i] = knot(i)`.
+    pub row_knot: Vec<u32>,
 }
 
 /// Sub-pixel positions of the axial tables.
@@ -190,13 +193,16 @@ impl AxialTables {
             }
             energy.push(e / AXIAL_SUBSTEPS as f64);
         }
-        AxialTables {
+        let mut t = AxialTables {
             half,
             rows_per_knot,
             knots,
             taps,
             energy,
-        }
+            row_knot: Vec::new(),
+        };
+        t.row_knot = (0..rows + half).map(|i| t.knot(i as f64) as u32).collect();
+        t
     }
 
     /// Knot of image row `row` (may be negative or past the image).
@@ -223,6 +229,24 @@ mod tests {
         // centroid of the attenuated Gaussian by ≈ its tail mass (≈ 1e-3)
         // and the 32-point sum is a trapezoid rule on a smooth integrand: 5 %.
         assert!((got / want - 1.0).abs() < 0.05, "shift {got} vs {want}");
+    }
+
+    /// The splat looks the knot of a scatterer at row `r` up as
+    /// `row_knot[max(⌊r⌋, 0)]`: the same knot as `knot(r)` over its whole
+    /// reach, `−K − 1 ≤ r < rows + K`.
+    #[test]
+    fn row_knot_table_gives_the_knot_of_every_reachable_row() {
+        let sp = Spectrum::new(7.5e6, 0.77, 2.0, 0.65);
+        for (dz, rows) in [(60e-3 / 384.0, 384), (60e-3 / 768.0, 768), (1e-4, 97)] {
+            let ax = AxialTables::new(&sp, dz, rows, 1540.0);
+            let k = ax.half as f64;
+            let mut r = -k - 1.0;
+            while r < rows as f64 + k {
+                let fl = (r.floor() as i64).max(0) as usize;
+                assert_eq!(ax.row_knot[fl] as usize, ax.knot(r), "row {r}");
+                r += 0.37;
+            }
+        }
     }
 
     #[test]

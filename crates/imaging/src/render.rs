@@ -134,6 +134,8 @@ pub struct Renderer {
     rf: Vec<[f32; 2]>,
     iq: Vec<[f32; 2]>,
     gray: Vec<u8>,
+    /// One column's round-trip loss exponents (Np), for the compression.
+    loss_scratch: Vec<f64>,
     geometry: FrameGeometry,
     /// Factor on the studied vein's (vessel 0's) lumen height: its
     /// Valsalva distension (issue 17), 1 at rest.
@@ -319,6 +321,7 @@ impl Renderer {
             rf: vec![[0.0; 2]; bins * padded_rows],
             iq: vec![[0.0; 2]; cfg.columns * cfg.rows],
             gray: vec![0; cfg.columns * cfg.rows],
+            loss_scratch: vec![0.0; cfg.rows],
             field,
             vein_distension: 1.0,
         }
@@ -531,7 +534,7 @@ impl Renderer {
             unsafe { self.stages_avx2(out) };
             return Ok(());
         }
-        self.stages(out);
+        self.stages::<false>(out);
         Ok(())
     }
 
@@ -541,13 +544,15 @@ impl Renderer {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn stages_avx2(&mut self, out: &mut [u8]) {
-        self.stages(out);
+        self.stages::<true>(out);
     }
 
     /// Stages 2–4 of a frame after [`Renderer::prepare`]: splat, lateral
-    /// convolution, compression and the transpose into `out`.
+    /// convolution, compression and the transpose into `out`. `AVX2`: called
+    /// from [`Renderer::stages_avx2`] (the splat's taps take AVX2
+    /// instructions; the same floats).
     #[inline(always)]
-    fn stages(&mut self, out: &mut [u8]) {
+    fn stages<const AVX2: bool>(&mut self, out: &mut [u8]) {
         let (t, g, f, pr) = (&*self.tables, &self.geometry, &self.field, self.padded_rows);
         let elev = if f.points {
             &t.elev_point[..]
@@ -557,7 +562,7 @@ impl Renderer {
         let w0 = self.window_start(self.pan_columns);
         for (b, col) in self.rf.chunks_mut(pr).enumerate() {
             let r = f.bin_start[w0 + b] as usize..f.bin_start[w0 + b + 1] as usize;
-            splat_column(
+            splat_column::<AVX2>(
                 t,
                 g,
                 elev,
@@ -598,6 +603,7 @@ impl Renderer {
                 &self.warps[b],
                 iq,
                 &adds.column(j),
+                &mut self.loss_scratch,
                 col,
             );
         }
@@ -787,4 +793,58 @@ fn correlation_length(h: &[[f64; 2]]) -> f64 {
     };
     let r0 = r(0);
     (-(n - 1)..n).map(|d| r(d) / r0).sum()
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use super::*;
+
+    /// The AVX2 stages (four taps per instruction) and the scalar fallback
+    /// give the same floats, hence the same frame, through warps, pan and
+    /// both anatomy and phantom fields.
+    #[test]
+    fn avx2_and_scalar_stages_give_the_same_frame() {
+        if !std::arch::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let cfg = ImagingConfig {
+            columns: 128,
+            rows: 192,
+            ..Default::default()
+        };
+        let mut leg = Renderer::new(&cfg, VeinState::Healthy).unwrap();
+        let bone = leg.anatomy().unwrap().femur_top();
+        let phantom = Phantom::Uniform {
+            density: 1e8,
+            seed: 3,
+        };
+        let mut speckle = Renderer::phantom(&cfg, &phantom).unwrap();
+        let n = cfg.columns * cfg.rows;
+        for r in [&mut leg, &mut speckle] {
+            for (k, press) in [2e-3, 9e-3, 14e-3].into_iter().enumerate() {
+                let d = SectionDeformation::flat_press(press, 0.04, 1.5e-3, bone).unwrap();
+                let input = FrameInput {
+                    deformation: &d,
+                    probe_pressure: 1e4 * k as f64,
+                    time: 0.2 * k as f64,
+                    lateral_offset: 2e-3 * k as f64 - 2e-3,
+                };
+                let (mut a, mut b) = (vec![0u8; n], vec![0u8; n]);
+                r.prepare(&input).unwrap();
+                // SAFETY: the CPU has AVX2 (checked above).
+                unsafe { r.stages_avx2(&mut a) };
+                let iq_a = r.iq.clone();
+                r.prepare(&input).unwrap();
+                r.stages::<false>(&mut b);
+                assert!(a == b, "frames differ at press {press}");
+                assert!(
+                    iq_a.iter()
+                        .zip(&r.iq)
+                        .all(|(x, y)| x[0].to_bits() == y[0].to_bits()
+                            && x[1].to_bits() == y[1].to_bits()),
+                    "IQ differs at press {press}"
+                );
+            }
+        }
+    }
 }

@@ -31,12 +31,21 @@ pub(crate) fn image_depth(g: &FrameGeometry, surface: f64, warps: &WarpSet, dept
     column_depth(surface, g.bone, d) - g.face
 }
 
+/// Scatterers whose setup [`splat_column`] computes together: two AVX2
+/// registers of f64 lanes, on the stack (nothing allocated per frame).
+const SPLAT_BATCH: usize = 8;
+
 /// Adds the axial PSF of each scatterer of one bin into its padded column
 /// `out` (`rows + 2·pad` complex samples, cleared first), weighted by the
-/// elevation weight `elev` of its splat row (`row + pad`).
+/// elevation weight `elev` of its splat row (`row + pad`). The per-scatterer
+/// setup (depth through the deformation, row, sub-row, phase) is computed
+/// [`SPLAT_BATCH`] scatterers at a time, then their taps are added one
+/// scatterer after the other: the same float operations per scatterer, in
+/// the same order into `out`. `AVX2`: the caller runs with AVX2 enabled
+/// (see [`add_taps`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(crate) fn splat_column(
+pub(crate) fn splat_column<const AVX2: bool>(
     t: &PsfTables,
     g: &FrameGeometry,
     elev: &[f32],
@@ -55,36 +64,131 @@ pub(crate) fn splat_column(
     let highest = (g.rows + k) as f64;
     let any_warp = warps.is_active();
     let last = elev.len() as i64 - 1;
-    for (&d, a) in depth.iter().zip(amp) {
-        let d = d as f64;
-        let z = if any_warp {
-            image_depth(g, surface, warps, d)
+    let phase_mask = PHASE_STEPS as i32 - 1;
+    for (ds, amps) in depth.chunks(SPLAT_BATCH).zip(amp.chunks(SPLAT_BATCH)) {
+        // Setup of the batch, lane by lane without branches (the compiler
+        // takes several lanes per instruction): image depth, fractional row,
+        // its floor, sub-row and phase index. Lanes past the batch's end, and
+        // lanes the loop below skips or stops at, are computed for nothing.
+        let mut z = [0.0f64; SPLAT_BATCH];
+        if any_warp {
+            for (zk, &d) in z.iter_mut().zip(ds) {
+                *zk = image_depth(g, surface, warps, d as f64);
+            }
         } else {
-            column_depth(surface, g.bone, d) - g.face
-        };
-        let r = z * inv_dz - 0.5;
-        if r < lowest {
-            continue;
+            for (zk, &d) in z.iter_mut().zip(ds) {
+                *zk = column_depth(surface, g.bone, d as f64) - g.face;
+            }
         }
-        if r >= highest {
-            break; // depths are sorted and the map is increasing
+        let mut r = [0.0f64; SPLAT_BATCH];
+        let mut fl = [0i32; SPLAT_BATCH];
+        let mut q = [0i32; SPLAT_BATCH];
+        let mut ph = [0i32; SPLAT_BATCH];
+        for l in 0..SPLAT_BATCH {
+            let rl = z[l] * inv_dz - 0.5;
+            let f = rl.floor();
+            r[l] = rl;
+            // For a splatted scatterer r − fl ∈ [0, 1) and −K − 1 ≤ fl <
+            // rows + K: the conversions through i32 give what the saturating
+            // ones to usize/i64 would, and clamping the sub-row at 63 before
+            // the truncation gives what clamping after it would.
+            q[l] = ((rl - f) * AXIAL_SUBSTEPS as f64).min((AXIAL_SUBSTEPS - 1) as f64) as i32;
+            fl[l] = f as i32;
+            // |z · 2k₀/2π · 4096| < 2³¹ for |z| < 53 m: the i32 truncation
+            // is the i64 one, and its low 12 bits the same.
+            ph[l] = (z[l] * t.phase_per_metre) as i32 & phase_mask;
         }
-        let fl = r.floor();
-        let q = (((r - fl) * AXIAL_SUBSTEPS as f64) as usize).min(AXIAL_SUBSTEPS - 1);
-        let p = t.phase[((z * t.phase_per_metre) as i64 & (PHASE_STEPS as i64 - 1)) as usize];
-        let e = elev[(fl as i64 + g.pad as i64).clamp(0, last) as usize];
-        let c = [
-            e * (a[0] * p[0] - a[1] * p[1]),
-            e * (a[0] * p[1] + a[1] * p[0]),
-        ];
-        // First tap: row fl − K + 1, at index fl − K + 1 + pad ≥ 0.
-        let first = (fl as i64 - k as i64 + 1 + g.pad as i64) as usize;
-        let base = (ax.knot(r) * AXIAL_SUBSTEPS + q) * taps;
-        let w = &ax.taps[base..base + taps];
-        for (o, wk) in out[first..first + taps].iter_mut().zip(w) {
-            o[0] += c[0] * wk[0] - c[1] * wk[1];
-            o[1] += c[0] * wk[1] + c[1] * wk[0];
+        for (l, a) in amps.iter().enumerate() {
+            if r[l] < lowest {
+                continue;
+            }
+            if r[l] >= highest {
+                return; // depths are sorted and the map is increasing
+            }
+            let p = t.phase[ph[l] as usize];
+            let fi = fl[l] as i64;
+            let e = elev[(fi + g.pad as i64).clamp(0, last) as usize];
+            let c = [
+                e * (a[0] * p[0] - a[1] * p[1]),
+                e * (a[0] * p[1] + a[1] * p[0]),
+            ];
+            // First tap: row fl − K + 1, at index fl − K + 1 + pad ≥ 0.
+            let first = (fi - k as i64 + 1 + g.pad as i64) as usize;
+            // `ax.knot(r)` from its table (no division).
+            let knot = ax.row_knot[fi.max(0) as usize] as usize;
+            let base = (knot * AXIAL_SUBSTEPS + q[l] as usize) * taps;
+            add_taps::<AVX2>(
+                &mut out[first..first + taps],
+                &ax.taps[base..base + taps],
+                c,
+            );
         }
+    }
+}
+
+/// `out[t] += c · w[t]` (complex) for every tap `t` (`out` and `w` of one
+/// length): `re += c₀w₀ − c₁w₁`, `im += c₀w₁ + c₁w₀`, one tap at a time, or
+/// with `AVX2` four taps per instruction ([`add_taps_avx2`]), which computes
+/// the same floats.
+#[inline(always)]
+fn add_taps<const AVX2: bool>(out: &mut [[f32; 2]], w: &[[f32; 2]], c: [f32; 2]) {
+    #[cfg(target_arch = "x86_64")]
+    if AVX2 {
+        // SAFETY: `AVX2` is true only in the code that `Renderer::stages_avx2`
+        // runs, after the CPU was found to have AVX2.
+        unsafe { add_taps_avx2(out, w, c) };
+        return;
+    }
+    for (o, wk) in out.iter_mut().zip(w) {
+        o[0] += c[0] * wk[0] - c[1] * wk[1];
+        o[1] += c[0] * wk[1] + c[1] * wk[0];
+    }
+}
+
+/// [`add_taps`] four taps (eight interleaved floats) at a time, in place:
+/// `a = c₀ (w₀, w₁)`, `b = c₁ (w₁, w₀)` (the pair swapped in its lane),
+/// then `addsub(a, b) = (c₀w₀ − c₁w₁, c₀w₁ + c₁w₀)` added to `out`: per lane
+/// the scalar loop's products, difference or sum and accumulation, in the
+/// same order and without FMA contraction, so the same floats, without
+/// splitting real and imaginary parts apart and back. Two taps left over
+/// (`w.len()` is even, `2K`) go through the 128-bit form of the same steps,
+/// a last odd tap through the scalar loop.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn add_taps_avx2(out: &mut [[f32; 2]], w: &[[f32; 2]], c: [f32; 2]) {
+    use std::arch::x86_64::*;
+    let n = out.len().min(w.len());
+    let (out, w) = (&mut out[..n], &w[..n]);
+    let (o4, o_rest) = out.as_chunks_mut::<4>();
+    let (w4, w_rest) = w.as_chunks::<4>();
+    let (c0, c1) = (_mm256_set1_ps(c[0]), _mm256_set1_ps(c[1]));
+    for (o, wk) in o4.iter_mut().zip(w4) {
+        // SAFETY: 4 × [f32; 2] = 8 contiguous f32 behind each reference;
+        // unaligned loads and stores.
+        unsafe {
+            let wv = _mm256_loadu_ps(wk.as_ptr().cast());
+            let ws = _mm256_permute_ps::<0b10_11_00_01>(wv);
+            let t = _mm256_addsub_ps(_mm256_mul_ps(c0, wv), _mm256_mul_ps(c1, ws));
+            let op = o.as_mut_ptr().cast::<f32>();
+            _mm256_storeu_ps(op, _mm256_add_ps(_mm256_loadu_ps(op), t));
+        }
+    }
+    let (o2, o_last) = o_rest.as_chunks_mut::<2>();
+    let (w2, w_last) = w_rest.as_chunks::<2>();
+    let (c0, c1) = (_mm_set1_ps(c[0]), _mm_set1_ps(c[1]));
+    for (o, wk) in o2.iter_mut().zip(w2) {
+        // SAFETY: 2 × [f32; 2] = 4 contiguous f32 behind each reference.
+        unsafe {
+            let wv = _mm_loadu_ps(wk.as_ptr().cast());
+            let ws = _mm_permute_ps::<0b10_11_00_01>(wv);
+            let t = _mm_addsub_ps(_mm_mul_ps(c0, wv), _mm_mul_ps(c1, ws));
+            let op = o.as_mut_ptr().cast::<f32>();
+            _mm_storeu_ps(op, _mm_add_ps(_mm_loadu_ps(op), t));
+        }
+    }
+    for (o, wk) in o_last.iter_mut().zip(w_last) {
+        o[0] += c[0] * wk[0] - c[1] * wk[1];
+        o[1] += c[0] * wk[1] + c[1] * wk[0];
     }
 }
 
@@ -167,7 +271,9 @@ pub(crate) struct LogCompression {
 }
 
 /// Round-trip attenuation, added clutter and noise, TGC along one column,
-/// and the log compression of its envelope into `gray`.
+/// and the log compression of its envelope into `gray`; `scratch` (at
+/// least `gray.len()` values) holds the column's loss exponents between
+/// the serial walk down the segments and the per-pixel pass.
 ///
 /// The received echo at image depth `z` is `(iq + clutter) · 10^{−A/20} + noise`,
 /// `A = 2 f ∫₀^z α(z') dz'` dB, displayed with the TGC gain `2 f α_TGC z` dB;
@@ -187,8 +293,10 @@ pub(crate) fn compress_column(
     warps: &WarpSet,
     iq: &[[f32; 2]],
     add: &Additive,
+    scratch: &mut [f64],
     gray: &mut [u8],
 ) {
+    let loss_np = &mut scratch[..gray.len()];
     // Breakpoints mapped to image depth (m, cm) and the slope after each.
     let mut z = [0.0f64; MAX_BREAKPOINTS + 1];
     let mut alpha = [0.0f64; MAX_BREAKPOINTS + 1];
@@ -220,7 +328,9 @@ pub(crate) fn compress_column(
         seg += 1;
     }
     let db_to_np = std::f64::consts::LN_10 / 20.0;
-    for (i, (px, out)) in iq.iter().zip(gray.iter_mut()).enumerate() {
+    // Pass 1 (serial: the segments): the round-trip loss exponent `−2 f A`
+    // (Np) of each row.
+    for (i, x) in loss_np.iter_mut().enumerate() {
         let zi = (i as f64 + 0.5) * g.dz;
         while seg < n && z[seg] <= zi {
             acc += slope * (z[seg] - z_at) * 100.0;
@@ -229,7 +339,13 @@ pub(crate) fn compress_column(
             seg += 1;
         }
         let att = acc + slope * (zi - z_at) * 100.0;
-        let loss = (-2.0 * lc.f_mhz * att * db_to_np).exp() as f32;
+        *x = -2.0 * lc.f_mhz * att * db_to_np;
+    }
+    // Pass 2 (independent pixels, which the compiler may take several at a
+    // time): loss, clutter and noise, TGC, log compression.
+    for (i, ((px, out), &x)) in iq.iter().zip(gray.iter_mut()).zip(&*loss_np).enumerate() {
+        let zi = (i as f64 + 0.5) * g.dz;
+        let loss = x.exp() as f32;
         let gain = 2.0 * lc.f_mhz * lc.tgc * zi * 100.0;
         let (c, ca, nz) = (add.clutter[i], add.clutter_amp[i], add.noise[i]);
         let re = (px[0] + ca * c[0]) * loss + add.noise_amp * nz[0];
