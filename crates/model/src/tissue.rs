@@ -289,14 +289,9 @@ impl TissueForces {
     pub fn add_stiffness_product(&self, x: &[Vec3], alpha: f64, w: &[Vec3], out: &mut [Vec3]) {
         let geo = self.geometric_in_compression;
         for s in &self.springs {
-            let delta = x[s.j] - x[s.i];
-            let l = delta.norm();
-            if l <= f64::MIN_POSITIVE {
+            let Some((d, g)) = spring_direction(s, x, geo) else {
                 continue;
-            }
-            let d = delta / l;
-            let f = linear_force(s.a, l - s.rest);
-            let g = if f < 0.0 && !geo { 0.0 } else { f / l };
+            };
             // S u = (a − g) (d·u) d + g u, u = w_j − w_i.
             let u = w[s.j] - w[s.i];
             let su = (d * ((s.a - g) * d.dot(&u)) + u * g) * alpha;
@@ -334,6 +329,20 @@ fn linear_spring_force(s: &LinearSpring, x: &[Vec3], v: &[Vec3]) -> Vec3 {
     delta * ((linear_force(s.a, l - s.rest) + s.c * rate) / l)
 }
 
+/// A linear spring's unit direction `d = (x_j − x_i)/l` and geometric
+/// stiffness `g = f/l` (N/m; 0 in compression unless `geo`), `f = a (l − L₀)`
+/// (paper §3, `f(x) = a x`); `None` for a spring of zero length.
+#[inline(always)]
+fn spring_direction(s: &LinearSpring, x: &[Vec3], geo: bool) -> Option<(Vec3, f64)> {
+    let delta = x[s.j] - x[s.i];
+    let l = delta.norm();
+    if l <= f64::MIN_POSITIVE {
+        return None;
+    }
+    let f = linear_force(s.a, l - s.rest);
+    Some((delta / l, if f < 0.0 && !geo { 0.0 } else { f / l }))
+}
+
 /// Adds a linear spring's edge term `α S + β c d dᵀ` to `a`:
 /// `p = α (a − g) + β c`, `q = α g`, `g = f/l` (0 in compression unless `geo`).
 #[inline(always)]
@@ -343,14 +352,9 @@ fn add_spring_term(
     (alpha, beta, geo): (f64, f64, bool),
     a: &mut EdgeMatrix,
 ) {
-    let delta = x[s.j] - x[s.i];
-    let l = delta.norm();
-    if l <= f64::MIN_POSITIVE {
+    let Some((d, g)) = spring_direction(s, x, geo) else {
         return;
-    }
-    let d = delta / l;
-    let f = linear_force(s.a, l - s.rest);
-    let g = if f < 0.0 && !geo { 0.0 } else { f / l };
+    };
     let p = alpha * (s.a - g) + beta * s.c;
     // (i, j) is a mesh edge, in the side matrix's pattern.
     let written = a.add_spring(s.i, s.j, &d, p, alpha * g);
@@ -420,14 +424,9 @@ impl ForceModel for TissueForces {
     ) {
         let geo = self.geometric_in_compression;
         for s in &self.springs {
-            let delta = x[s.j] - x[s.i];
-            let l = delta.norm();
-            if l <= f64::MIN_POSITIVE {
+            let Some((d, g)) = spring_direction(s, x, geo) else {
                 continue;
-            }
-            let d = delta / l;
-            let f = linear_force(s.a, l - s.rest);
-            let g = if f < 0.0 && !geo { 0.0 } else { f / l };
+            };
             // α S + β D with S = (a − g) d dᵀ + g I and D = c d dᵀ.
             let ddt = d * d.transpose();
             let block =
