@@ -5,7 +5,9 @@
 //! field 41: 1 = SCHED_FIFO, 0 = SCHED_OTHER) matches the reported
 //! priority. The physics thread runs FIFO too, below the haptic loop
 //! (`PHYSICS_FIFO_PRIORITY`), so a busy browser cannot starve the model and
-//! the tick still preempts it. Linux only (the `/proc` interface).
+//! the tick still preempts it. The imaging thread stays time-shared, at
+//! nice `IMAGING_NICE` where it may be raised (field 19). Linux only (the
+//! `/proc` interface).
 
 #![cfg(target_os = "linux")]
 
@@ -18,20 +20,38 @@ use std::time::{Duration, Instant};
 /// `name` (proc(5): fields 40 and 41 of `stat`, counted after the
 /// parenthesised command name).
 fn sched_of(name: &str) -> Option<(u32, u32)> {
+    let f = stat_of(name)?;
+    // Fields from 3 (state) on: rt_priority is field 40, the 38th here.
+    Some((f.get(37)?.parse().ok()?, f.get(38)?.parse().ok()?))
+}
+
+/// The nice value of the thread named `name` (proc(5): field 19).
+fn nice_of(name: &str) -> Option<i32> {
+    stat_of(name)?.get(16)?.parse().ok()
+}
+
+/// The fields of `/proc/self/task/*/stat` from field 3 (state) on, of the
+/// newest thread named `name`. (An unnamed thread takes its creator's
+/// name: the rayon pool that the first imaging thread starts for its beam
+/// tables is named "imaging" too, and outlives that live system; the newest
+/// of the name is the running system's imaging thread, or a pool thread it
+/// started, with its nice value.)
+fn stat_of(name: &str) -> Option<Vec<String>> {
+    let mut newest: Option<(u64, Vec<String>)> = None;
     for e in std::fs::read_dir("/proc/self/task").ok()? {
         let dir = e.ok()?.path();
         let comm = std::fs::read_to_string(dir.join("comm")).ok()?;
         if comm.trim() != name {
             continue;
         }
+        let tid: u64 = dir.file_name()?.to_str()?.parse().ok()?;
         let stat = std::fs::read_to_string(dir.join("stat")).ok()?;
         let after = &stat[stat.rfind(')')? + 2..];
-        // Fields from 3 (state) on: rt_priority is field 40, the 38th here.
-        let mut fields = after.split_whitespace().skip(37);
-        let rt = fields.next()?.parse().ok()?;
-        return Some((rt, fields.next()?.parse().ok()?));
+        if newest.as_ref().is_none_or(|(t, _)| tid > *t) {
+            newest = Some((tid, after.split_whitespace().map(str::to_owned).collect()));
+        }
     }
-    None
+    newest.map(|(_, f)| f)
 }
 
 /// What the kernel says of the haptic and the physics thread.
@@ -39,6 +59,8 @@ struct Threads {
     reported: HapticPriority,
     haptic: (u32, u32),
     physics: (u32, u32),
+    /// The imaging thread's (policy, nice).
+    imaging: (u32, i32),
 }
 
 /// Starts the live system with `scenario` and returns the reported
@@ -59,11 +81,23 @@ fn priority_of(scenario: Scenario) -> Threads {
     let reported = snap.status.haptic_priority;
     let haptic = sched_of("haptic-loop").expect("the haptic-loop thread");
     let physics = sched_of("physics").expect("the physics thread");
+    // The imaging thread sets its nice value as it starts.
+    let imaging = loop {
+        let i = (
+            sched_of("imaging").expect("the imaging thread").1,
+            nice_of("imaging").expect("its nice value"),
+        );
+        if i.1 != 0 || Instant::now() > end {
+            break i;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
     system.shutdown().unwrap();
     Threads {
         reported,
         haptic,
         physics,
+        imaging,
     }
 }
 
@@ -74,9 +108,11 @@ fn the_reported_priority_is_the_kernels() {
     let t = priority_of(Scenario::default());
     let (reported, policy) = (t.reported, t.haptic.1);
     eprintln!(
-        "haptic loop: reported {reported:?}, kernel (rt_priority, policy) {:?}; physics {:?}",
-        t.haptic, t.physics
+        "haptic loop: reported {reported:?}, kernel (rt_priority, policy) {:?}; physics {:?}; imaging (policy, nice) {:?}",
+        t.haptic, t.physics, t.imaging
     );
+    // The imaging thread is never real-time.
+    assert_eq!(t.imaging.0, 0, "imaging at policy {}", t.imaging.0);
     match reported {
         HapticPriority::Realtime => {
             assert_eq!(policy, 1, "reported real-time, not SCHED_FIFO");
@@ -92,6 +128,8 @@ fn the_reported_priority_is_the_kernels() {
                 t.physics.0,
                 t.haptic.0
             );
+            // The privilege that grants FIFO grants a lower nice value.
+            assert_eq!(t.imaging.1, echothigh_runtime::live_system::IMAGING_NICE);
         }
         HapticPriority::Raised | HapticPriority::Normal => {
             assert_eq!(policy, 0, "reported {reported:?}, the kernel says {policy}")
@@ -113,4 +151,5 @@ fn the_reported_priority_is_the_kernels() {
         "physics not asked for, at policy {}",
         t.physics.1
     );
+    assert_eq!(t.imaging, (0, 0), "imaging not asked for");
 }

@@ -203,12 +203,15 @@ impl LiveControl for FakeLive {
             .map(|d| d.name.clone())
     }
 
+    /// Frame `f` is a uniform image at [`fake_image_level`]`(f)`: flat 8 × 8
+    /// blocks go through the JPEG wire within one grey level, so a test
+    /// tells the frames apart.
     fn image(&self, out: &mut Vec<u8>) -> ImageInfo {
         let mut i = self.inner.lock().unwrap();
         i.frame += 1;
         let f = i.frame as u32;
         out.clear();
-        out.extend((0..IMAGE.0 * IMAGE.1).map(|k| ((k + f) % 251) as u8));
+        out.resize((IMAGE.0 * IMAGE.1) as usize, fake_image_level(f));
         ImageInfo {
             width: IMAGE.0,
             height: IMAGE.1,
@@ -359,4 +362,10 @@ fn angle_diff(a: f64, b: f64) -> f64 {
     } else {
         d
     }
+}
+
+/// The grey level of the double's image frame `frame`: 16 + 37·frame mod
+/// 224, a different level from one frame to the next.
+pub fn fake_image_level(frame: u32) -> u8 {
+    (16 + (frame.wrapping_mul(37)) % 224) as u8
 }

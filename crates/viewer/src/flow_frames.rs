@@ -1,6 +1,5 @@
 //! The Doppler part of the lean wire (issue 17): the colour overlay added
-//! to an image frame ([`FrameKind::ImagePngFlow`],
-//! [`FrameKind::ImageDeltaFlow`]) and the spectral lines
+//! to an image frame ([`FrameKind::ImageJpegFlow`]) and the spectral lines
 //! ([`FrameKind::Spectral`]).
 //!
 //! The overlay is one code a pixel, 0 where the frame has no colour, so
@@ -13,26 +12,25 @@ use super::protocol::{FrameHeader, FrameKind, FRAME_HEADER_LEN};
 use echothigh_runtime::live_doppler::{SpectralLines, SPECTRAL_ROWS};
 
 /// `image` (a frame of [`super::frames::WireState::image`]: header, f64
-/// time, PNG) with the overlay `codes` (`width × height`) of the same
+/// time, JPEG) with the overlay `codes` (`width × height`) of the same
 /// frame appended: the flow kind of the same frame, the image PNG's length
 /// before it. `None` (the frame to be sent as it is) when `codes` is not
 /// the image's size or the frame is not an image frame.
 pub fn with_overlay(image: &[u8], codes: &[u8]) -> Option<Vec<u8>> {
     let (h, body) = FrameHeader::parse(image)?;
     let kind = match h.kind {
-        FrameKind::ImagePng => FrameKind::ImagePngFlow,
-        FrameKind::ImageDelta => FrameKind::ImageDeltaFlow,
+        FrameKind::ImageJpeg => FrameKind::ImageJpegFlow,
         _ => return None,
     };
     if codes.len() != h.a as usize * h.b as usize || codes.is_empty() {
         return None;
     }
-    let (time, png) = body.split_at(8);
+    let (time, jpeg) = body.split_at(8);
     let mut out = Vec::with_capacity(image.len() + 4 + codes.len() / 8);
     FrameHeader { kind, ..h }.write(&mut out);
     out.extend_from_slice(time);
-    out.extend_from_slice(&(png.len() as u32).to_le_bytes());
-    out.extend_from_slice(png);
+    out.extend_from_slice(&(jpeg.len() as u32).to_le_bytes());
+    out.extend_from_slice(jpeg);
     if let Err(e) = encode_png(h.a, h.b, codes, &mut out) {
         tracing::error!("encoding a colour overlay: {e}");
         return None;
@@ -74,9 +72,9 @@ mod tests {
     }
 
     /// An image with its overlay: the page's parse gets back the image
-    /// frame's PNG byte for byte and the overlay codes exactly; the key
-    /// frame becomes `ImagePngFlow`, the next `ImageDeltaFlow`; an overlay
-    /// of the wrong size is refused (the frame then goes without it).
+    /// frame's JPEG byte for byte and the overlay codes exactly; every frame
+    /// becomes `ImageJpegFlow`; an overlay of the wrong size is refused (the
+    /// frame then goes without it).
     #[test]
     fn the_overlay_rides_with_its_frame() {
         let (w, h) = (64u32, 48u32);
@@ -86,7 +84,7 @@ mod tests {
             *c = 1 + (k % 255) as u8;
         }
         let mut wire = WireState::default();
-        for (frame, kind) in [(1, FrameKind::ImagePngFlow), (2, FrameKind::ImageDeltaFlow)] {
+        for (frame, kind) in [(1, FrameKind::ImageJpegFlow), (2, FrameKind::ImageJpegFlow)] {
             let info = ImageInfo {
                 width: w,
                 height: h,

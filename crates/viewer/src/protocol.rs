@@ -25,8 +25,9 @@ use echothigh_runtime::live_device::LiveDeviceStatus;
 use echothigh_runtime::live_doppler::{DopplerCommand, DopplerStatus, DOPPLER_COMMAND_TYPES};
 use serde::{Deserialize, Serialize};
 
-/// Version carried by every JSON envelope and binary frame header.
-pub const PROTOCOL_VERSION: u32 = 1;
+/// Version carried by every JSON envelope and binary frame header: 2 since
+/// the image frames became JPEG (a page of version 1 says it is stale).
+pub const PROTOCOL_VERSION: u32 = 2;
 
 /// Largest accepted page message (bytes). Commands are a few dozen bytes.
 pub const MAX_CLIENT_MESSAGE: usize = 4096;
@@ -287,23 +288,19 @@ pub enum FrameKind {
     /// Deformed surface: `a` = node count, `b` = 0, then `3a` f32 positions
     /// (m) and `a` f32 compressions (fraction of the asymptote, 0..1).
     Surface = 2,
-    /// Echographic image as a PNG: `a` = width, `b` = height, then the f64
-    /// simulated time (s) of the state it shows, then an 8-bit gray PNG.
-    ImagePng = 3,
-    /// The change of the image since the connection's previous image frame:
-    /// as [`FrameKind::ImagePng`], the PNG holding `new − old` modulo 256.
-    ImageDelta = 4,
+    /// Echographic image as a JPEG: `a` = width, `b` = height, then the f64
+    /// simulated time (s) of the state it shows, then an 8-bit gray JPEG.
+    /// (Protocol 1's kinds 3 and 4, a PNG and a PNG delta, are retired.)
+    ImageJpeg = 3,
     /// The surface nodes that moved: `a` = their count, `b` = all nodes,
     /// then `a` u32 indices, `3a` f32 positions (m), `a` f32 compressions.
     SurfaceDelta = 5,
-    /// [`FrameKind::ImagePng`] with the colour overlay of the same frame
+    /// [`FrameKind::ImageJpeg`] with the colour overlay of the same frame
     /// (issue 17): `a` = width, `b` = height, the f64 time (s), a u32 byte
-    /// length `L`, the image's PNG (`L` bytes), then an 8-bit gray PNG of
-    /// the overlay codes (0 none, else `echothigh_doppler::code_rgb`).
-    ImagePngFlow = 6,
-    /// [`FrameKind::ImageDelta`] with the colour overlay, laid out as
-    /// [`FrameKind::ImagePngFlow`] (the overlay whole, not a delta).
-    ImageDeltaFlow = 7,
+    /// length `L`, the image's JPEG (`L` bytes), then an 8-bit gray PNG of
+    /// the overlay codes (0 none, else `echothigh_doppler::code_rgb`),
+    /// lossless because they are codes. (Protocol 1's kind 7 is retired.)
+    ImageJpegFlow = 6,
     /// PW spectral lines (issue 17): `a` = lines, `b` = rows a line, then
     /// the u64 number of the first line, its f64 time (s), the f64 time
     /// between lines (s), then `a·b` 8-bit magnitudes, line after line,
@@ -350,11 +347,9 @@ impl FrameHeader {
         let kind = match head[5] {
             1 => FrameKind::Image,
             2 => FrameKind::Surface,
-            3 => FrameKind::ImagePng,
-            4 => FrameKind::ImageDelta,
+            3 => FrameKind::ImageJpeg,
             5 => FrameKind::SurfaceDelta,
-            6 => FrameKind::ImagePngFlow,
-            7 => FrameKind::ImageDeltaFlow,
+            6 => FrameKind::ImageJpegFlow,
             8 => FrameKind::Spectral,
             _ => return None,
         };
@@ -364,9 +359,9 @@ impl FrameHeader {
         let fits = match kind {
             FrameKind::Image => payload.len() == a as usize * b as usize,
             FrameKind::Surface => payload.len() == a as usize * 16,
-            FrameKind::ImagePng | FrameKind::ImageDelta => payload.len() > 8,
+            FrameKind::ImageJpeg => payload.len() > 8,
             FrameKind::SurfaceDelta => payload.len() == a as usize * 20 && a <= b,
-            FrameKind::ImagePngFlow | FrameKind::ImageDeltaFlow => payload.len() > 12,
+            FrameKind::ImageJpegFlow => payload.len() > 12,
             FrameKind::Spectral => payload.len() == 24 + a as usize * b as usize,
         };
         fits.then_some((FrameHeader { kind, a, b }, payload))

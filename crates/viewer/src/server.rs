@@ -15,6 +15,7 @@ use super::exam::ExamSession;
 use super::frames::{ByteBudget, WireState, BURST_BYTES, BYTES_PER_SECOND};
 use super::protocol::{
     decode_client, ClientMessage, Envelope, ServerMessage, ViewState, ViewerCommand, CREDIT,
+    PROTOCOL_VERSION,
 };
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::extract::State;
@@ -420,8 +421,9 @@ async fn ws_upgrade(
 
 /// Serialises a server message (serialising these types cannot fail).
 fn json(body: ServerMessage) -> Message {
-    let text = serde_json::to_string(&Envelope::new(body))
-        .unwrap_or_else(|e| format!(r#"{{"v":1,"type":"error","message":"encoding: {e}"}}"#));
+    let text = serde_json::to_string(&Envelope::new(body)).unwrap_or_else(|e| {
+        format!(r#"{{"v":{PROTOCOL_VERSION},"type":"error","message":"encoding: {e}"}}"#)
+    });
     Message::Text(Utf8Bytes::from(text))
 }
 

@@ -23,6 +23,7 @@ mod doppler_control;
 #[cfg(test)]
 mod doppler_tests;
 mod hardware_loop;
+mod imaging_priority;
 mod imaging_source;
 mod publish;
 mod route;
@@ -31,6 +32,7 @@ mod shared;
 
 pub use device_status::device_drives_message;
 pub use hardware_loop::{DeviceLoop, SkinNormal};
+pub use imaging_priority::IMAGING_NICE;
 
 use crate::live::{
     CommandLimits, CouplingMode, ImageInfo, LiveCommand, LiveControl, LiveMesh, LiveSnapshot,

@@ -150,6 +150,7 @@ impl ImagingThread {
         doppler: Arc<DopplerShared>,
     ) -> Result<Self> {
         let cfg = scenario.live_imaging_config();
+        let raise = scenario.haptics.runner.realtime_priority;
         let leg = LegSurface::new(&scenario.thigh, "thigh").context("the scenario's leg")?;
         let (reading, reading_out) = triple_buffer::triple_buffer(&None);
         *shared
@@ -161,6 +162,7 @@ impl ImagingThread {
         let handle = std::thread::Builder::new()
             .name("imaging".into())
             .spawn(move || {
+                super::imaging_priority::request_imaging_priority(raise);
                 let r = imaging_loop(&shared, &doppler, &cfg, leg, thrombi, reading, &st);
                 if let Err(e) = &r {
                     shared.report_fault("imaging", e);

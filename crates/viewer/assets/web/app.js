@@ -9,14 +9,12 @@ import { deviceDrives, showDevice } from './device.js';
 import { Guide } from './guide.js';
 import { setupDoppler } from './doppler.js';
 
-const PROTOCOL_VERSION = 1;
+const PROTOCOL_VERSION = 2;
 const FRAME_IMAGE = 1;
 const FRAME_SURFACE = 2;
-const FRAME_IMAGE_PNG = 3; // f64 time, then a gray PNG
-const FRAME_IMAGE_DELTA = 4; // f64 time, then a PNG of (new − old) mod 256
+const FRAME_IMAGE_JPEG = 3; // f64 time, then a gray JPEG
 const FRAME_SURFACE_DELTA = 5; // a changed of b nodes: u32 indices, 3a f32 positions, a f32 compressions
-const FRAME_IMAGE_PNG_FLOW = 6; // as 3, with u32 length L before the PNG, then the colour overlay's PNG
-const FRAME_IMAGE_DELTA_FLOW = 7; // as 4, likewise
+const FRAME_IMAGE_JPEG_FLOW = 6; // as 3, with u32 length L before the JPEG, then the colour overlay's PNG
 const FRAME_SPECTRAL = 8; // a lines of b rows: u64 first, f64 time, f64 interval, then a·b bytes
 const DEPTH_STEP = 0.0005; // m per wheel notch or key press
 const MAX_DEPTH = 0.035; // m, below the server's limit
@@ -134,26 +132,29 @@ function onFrame(buf) {
   } else if (kind === FRAME_SPECTRAL && buf.byteLength === 40 + a * b && b === 64) {
     const interval = new DataView(buf, 32, 8).getFloat64(0, true);
     doppler.lines(new Uint8Array(buf, 40), a, interval);
-  } else if ((kind === FRAME_IMAGE_PNG || kind === FRAME_IMAGE_DELTA) && buf.byteLength > 24
-    || (kind === FRAME_IMAGE_PNG_FLOW || kind === FRAME_IMAGE_DELTA_FLOW) && buf.byteLength > 28) {
+  } else if (kind === FRAME_IMAGE_JPEG && buf.byteLength > 24 || kind === FRAME_IMAGE_JPEG_FLOW && buf.byteLength > 28) {
     const time = new DataView(buf, 16, 8).getFloat64(0, true);
-    const flow = kind === FRAME_IMAGE_PNG_FLOW || kind === FRAME_IMAGE_DELTA_FLOW;
+    const flow = kind === FRAME_IMAGE_JPEG_FLOW;
     const len = flow ? new DataView(buf, 24, 4).getUint32(0, true) : buf.byteLength - 24;
     const at = flow ? 28 : 24;
-    const png = new Blob([new Uint8Array(buf, at, len)], { type: 'image/png' });
+    const jpeg = new Blob([new Uint8Array(buf, at, len)], { type: 'image/jpeg' });
     const codes = flow ? new Blob([new Uint8Array(buf, at + len)], { type: 'image/png' }) : null;
-    const key = kind === FRAME_IMAGE_PNG || kind === FRAME_IMAGE_PNG_FLOW;
     const arrived = performance.now();
-    // Decoded in arrival order: a delta applies to the image before it.
-    imageChain = imageChain.then(() => Promise.all([decodeGray(png, a, b), codes && decodeGray(codes, a, b)])).then(([px, overlay]) => {
-      if (key) gray = px;
-      else if (gray && gray.length === px.length) for (let i = 0; i < px.length; i++) gray[i] = (gray[i] + px[i]) & 255;
-      else return; // a delta without its key frame (cannot happen on one connection)
+    // Flow control: one image decoding and one more on its way. The first
+    // is acknowledged on arrival, so the server renders and sends the next
+    // while this one decodes; one that arrives while another decodes is
+    // acknowledged when that one is drawn.
+    decoding += 1;
+    if (decoding === 1) send({ type: 'image_ack' }); else ackOwed = true;
+    imageChain = imageChain.then(() => Promise.all([decodeGray(jpeg, a, b), codes && decodeGray(codes, a, b)])).then(([px, overlay]) => {
+      gray = px;
       showImage(a, b, gray, time, overlay);
       stamp(live.costs.image, performance.now() - arrived);
     }).catch((e) => toast(`image: ${e.message}`))
-      // Flow control: the server sends the next image once this one is shown.
-      .finally(() => send({ type: 'image_ack' }));
+      .finally(() => {
+        decoding -= 1;
+        if (ackOwed) { ackOwed = false; send({ type: 'image_ack' }); }
+      });
   }
 }
 
@@ -161,6 +162,8 @@ function onFrame(buf) {
 const surface = { pos: null, comp: null };
 let gray = null;
 let imageChain = Promise.resolve();
+let decoding = 0; // images received and not yet drawn
+let ackOwed = false; // an image_ack held back while one decodes
 function showSurface() {
   if (scene) scene.updateSurface(surface.pos, surface.comp);
   live.surfaceFrames += 1;
@@ -198,10 +201,10 @@ function showImage(w, h, px, time, overlay = null) {
 }
 const grayCanvas = new OffscreenCanvas(1, 1);
 const grayCtx = grayCanvas.getContext('2d', { willReadFrequently: true });
-/** The gray levels of an 8-bit gray PNG, exactly (no colour management). */
+/** The gray levels of an 8-bit gray JPEG or PNG (no colour management). */
 async function decodeGray(blob, w, h) {
   const bmp = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
-  if (bmp.width !== w || bmp.height !== h) throw new Error(`PNG of ${bmp.width}×${bmp.height}, header ${w}×${h}`);
+  if (bmp.width !== w || bmp.height !== h) throw new Error(`image of ${bmp.width}×${bmp.height}, header ${w}×${h}`);
   grayCanvas.width = w; grayCanvas.height = h;
   grayCtx.drawImage(bmp, 0, 0);
   bmp.close();

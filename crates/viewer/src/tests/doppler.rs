@@ -7,7 +7,7 @@
 use super::super::fake::FakeLive;
 use super::super::fake_doppler::{FakeDoppler, DISC_CODE, LINES_PER_FRAME};
 use super::super::protocol::{decode_client, ClientMessage, FrameHeader, FrameKind};
-use super::server::{connect, decode_png, next, next_error, next_state, send, start};
+use super::server::{connect, decode_jpeg, decode_png, next, next_error, next_state, send, start};
 use echothigh_runtime::live::CommandLimits;
 use echothigh_runtime::live_doppler::{DopplerCommand, DopplerMode, SPECTRAL_ROWS};
 use std::sync::Arc;
@@ -137,8 +137,7 @@ async fn colour_mode_sends_the_overlay_with_its_frame() {
     let fake = Arc::new(FakeLive::new());
     let mut ws = connect(start(fake).await).await;
     send(&mut ws, r#"{"type":"doppler_mode","mode":"color"}"#).await;
-    let flow = [FrameKind::ImagePngFlow, FrameKind::ImageDeltaFlow];
-    let f = next_frame(&mut ws, &flow).await;
+    let f = next_frame(&mut ws, &[FrameKind::ImageJpegFlow]).await;
     let (h, body) = FrameHeader::parse(&f).unwrap();
     let l = u32::from_le_bytes(body[8..12].try_into().unwrap()) as usize;
     let codes = decode_png(&body[12 + l..]);
@@ -156,14 +155,14 @@ async fn colour_mode_sends_the_overlay_with_its_frame() {
         }
     }
     assert!(inside > 0);
-    // The image PNG decodes to the frame's size.
-    assert_eq!(decode_png(&body[12..12 + l]).len(), w * ht);
+    // The image JPEG decodes to the frame's size.
+    assert_eq!(decode_jpeg(&body[12..12 + l]).len(), w * ht);
     send(&mut ws, r#"{"type":"doppler_mode","mode":"bmode"}"#).await;
     next_state(&mut ws, |s| {
         s.doppler.is_some_and(|d| d.mode == DopplerMode::Bmode)
     })
     .await;
-    next_frame(&mut ws, &[FrameKind::ImageDelta, FrameKind::ImagePng]).await;
+    next_frame(&mut ws, &[FrameKind::ImageJpeg]).await;
 }
 
 /// Spectral mode: the lines arrive numbered without gap or repeat, each

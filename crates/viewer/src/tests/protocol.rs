@@ -93,7 +93,7 @@ fn state_message_is_versioned_typed_and_round_trips() {
     let state = sample_state();
     let text = serde_json::to_string(&Envelope::new(ServerMessage::State(state.clone()))).unwrap();
     let value: serde_json::Value = serde_json::from_str(&text).unwrap();
-    assert_eq!(value["v"], 1);
+    assert_eq!(value["v"], 2);
     assert_eq!(value["type"], "state");
     assert_eq!(value["mode"], "hold");
     assert_eq!(value["vein"], "acute");
@@ -138,7 +138,7 @@ fn hello_and_error_round_trip() {
         message: "nope".into(),
     });
     let text = serde_json::to_string(&err).unwrap();
-    assert_eq!(text, r#"{"v":1,"type":"error","message":"nope"}"#);
+    assert_eq!(text, r#"{"v":2,"type":"error","message":"nope"}"#);
 }
 
 #[test]

@@ -4,7 +4,7 @@
 
 use super::super::exam::sink::MemorySink;
 use super::super::exam::{ExamPlan, ExamSession};
-use super::super::fake::FakeLive;
+use super::super::fake::{fake_image_level, FakeLive};
 use super::super::protocol::{Envelope, FrameHeader, FrameKind, ServerMessage, ViewState};
 use super::super::server::loopback_host;
 use super::super::{check_bind, check_rate, serve_on, ServerConfig};
@@ -79,10 +79,7 @@ pub(super) async fn next(ws: &mut Client) -> Message {
             FrameHeader::parse(b),
             Some((h, _)) if matches!(
                 h.kind,
-                FrameKind::ImagePng
-                    | FrameKind::ImageDelta
-                    | FrameKind::ImagePngFlow
-                    | FrameKind::ImageDeltaFlow
+                FrameKind::ImageJpeg | FrameKind::ImageJpegFlow
             )
         ) {
             send(ws, r#"{"type":"image_ack"}"#).await;
@@ -108,7 +105,7 @@ pub(super) async fn next_json(
     for _ in 0..500 {
         if let Message::Text(t) = next(ws).await {
             let env: Envelope = serde_json::from_str(t.as_str()).unwrap();
-            assert_eq!(env.v, 1);
+            assert_eq!(env.v, super::super::protocol::PROTOCOL_VERSION);
             if pred(&env.body) {
                 return env.body;
             }
@@ -160,11 +157,13 @@ async fn hello_then_state_surface_and_image_frames() {
         }
         other => panic!("first message {other:?}"),
     }
-    // The first surface frame holds every node; the first image is a PNG
-    // key frame, the next ones PNG deltas that rebuild the double's frames
-    // exactly (its pixel k of frame f is (k + f) mod 251).
-    let (mut surface, mut deltas) = (false, 0);
-    let mut page_image: Option<Vec<u8>> = None;
+    // The first surface frame holds every node; the images are JPEGs of the
+    // double's frames, each uniform at `fake_image_level(frame)`: a flat
+    // 8 × 8 block is its DC coefficient alone, quantized at quality 80 by a
+    // step of 6 (16 · 0.4) on 8 × the mean, so within 6/16 < 0.5 level of
+    // the mean, plus the decoder's rounding: within 1 level.
+    let (mut surface, mut images) = (false, 0);
+    let mut last_frame = 0u32;
     for _ in 0..200 {
         if let Message::Binary(b) = next(&mut ws).await {
             let (h, body) = FrameHeader::parse(&b).expect("bad frame");
@@ -174,35 +173,28 @@ async fn hello_then_state_surface_and_image_frames() {
                     surface = true;
                 }
                 FrameKind::SurfaceDelta => assert!(h.a <= h.b),
-                FrameKind::ImagePng => {
+                FrameKind::ImageJpeg => {
                     assert_eq!((h.a, h.b), (32, 24));
-                    assert!(page_image.is_none(), "a second key frame");
-                    page_image = Some(decode_png(&body[8..]));
-                }
-                FrameKind::ImageDelta => {
-                    let img = page_image.as_mut().expect("a delta before a key frame");
-                    for (p, d) in img.iter_mut().zip(decode_png(&body[8..])) {
-                        *p = p.wrapping_add(d);
-                    }
-                    deltas += 1;
+                    let img = decode_jpeg(&body[8..]);
+                    assert_eq!(img.len(), 32 * 24);
+                    // The frame it shows: a later one than the last image.
+                    let frame = (last_frame + 1..last_frame + 400)
+                        .find(|&f| {
+                            let l = fake_image_level(f);
+                            img.iter().all(|&p| p.abs_diff(l) <= 1)
+                        })
+                        .expect("an image that is none of the next frames");
+                    last_frame = frame;
+                    images += 1;
                 }
                 other => panic!("the server sent a {other:?} frame"),
             }
-            if let Some(img) = &page_image {
-                let f = u32::from(img[0]);
-                for (k, &p) in img.iter().enumerate() {
-                    assert_eq!(u32::from(p), (k as u32 + f) % 251, "pixel {k}");
-                }
-            }
         }
-        if surface && deltas >= 3 {
+        if surface && images >= 4 {
             break;
         }
     }
-    assert!(
-        surface && deltas >= 3,
-        "surface {surface}, {deltas} image deltas"
-    );
+    assert!(surface && images >= 4, "surface {surface}, {images} images");
     let s = next_state(&mut ws, |_| true).await;
     assert_eq!(s.vein, Some(VeinState::Healthy));
     assert!(!s.exam.is_some_and(|e| e.open));
@@ -624,6 +616,15 @@ async fn wait_watchers(fake: &FakeLive, n: usize) {
 }
 
 /// An 8-bit grayscale PNG's pixels.
+/// The gray pixels of a JPEG image frame's body.
+pub(super) fn decode_jpeg(jpeg: &[u8]) -> Vec<u8> {
+    let mut d = jpeg_decoder::Decoder::new(jpeg);
+    let px = d.decode().expect("a JPEG the decoder reads");
+    let info = d.info().unwrap();
+    assert_eq!(info.pixel_format, jpeg_decoder::PixelFormat::L8);
+    px
+}
+
 pub(super) fn decode_png(png_bytes: &[u8]) -> Vec<u8> {
     let mut reader = png::Decoder::new(png_bytes).read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size()];
@@ -647,7 +648,7 @@ async fn an_unacknowledged_page_gets_no_backlog() {
     while let Ok(Some(Ok(m))) = tokio::time::timeout_at(deadline, ws.next()).await {
         if let Message::Binary(b) = &m {
             let kind = FrameHeader::parse(b).unwrap().0.kind;
-            images += usize::from(matches!(kind, FrameKind::ImagePng | FrameKind::ImageDelta));
+            images += usize::from(kind == FrameKind::ImageJpeg);
         }
         if let Message::Text(t) = m {
             if let ServerMessage::State(s) =

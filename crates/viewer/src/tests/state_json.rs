@@ -97,7 +97,7 @@ fn state_json_is_unchanged_byte_for_byte() {
     // issue 19; `imaging_rate`, the image's achieved frames/s, for issue 19 —
     // this golden was updated deliberately for each).
     let expected = concat!(
-        r#"{"v":1,"type":"state","time":1.25,"probe_position":[0.0,0.07,0.01],"#,
+        r#"{"v":2,"type":"state","time":1.25,"probe_position":[0.0,0.07,0.01],"#,
         r#""probe_orientation":[1.0,0.0,0.0,0.0],"device":[0.0,0.0,0.0],"#,
         r#""proxy":[0.0,0.0,0.0],"rendered_force":[0.0,4.5,0.0],"#,
         r#""physics_force":[0.0,4.0,0.1],"max_force":30.0,"physics_rate":98.0,"#,
