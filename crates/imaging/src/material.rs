@@ -139,7 +139,7 @@ fn cell_seed(seed: u64, a: i64, b: i64, tag: u64) -> u64 {
 /// 3–12 mm) in fat only, perimysium in muscle only. Returns the index of
 /// the lines that brighten scatterers and the septa drawn as coherent
 /// sheets (empty unless `tex.coherent_septa`).
-fn material_lines(
+pub(crate) fn material_lines(
     seed: u64,
     tex: &TextureConfig,
     lo: f64,

@@ -1,11 +1,11 @@
 //! Slow-flow "smoke" in the studied vein (issue 21, an option:
 //! [`crate::TextureConfig::smoke`]).
 //!
-//! At low shear rates red cells aggregate and blood's echo rises from
-//! ≈ −50 dB to the −30 to −40 dB re muscle of the swirling "smoke" seen in
-//! slowly flowing veins (Yuan & Shung 1988, "Ultrasonic backscatter from
-//! flowing whole blood", JASA 84(1): backscatter rising as the shear rate
-//! falls). The smoke is a unit-power complex speckle at
+//! At low shear rates red cells aggregate and blood's echo rises (Yuan &
+//! Shung 1988, "Ultrasonic backscatter from flowing whole blood", JASA
+//! 84(1)), from the ≈ −50 dB re muscle of flowing blood in this model to
+//! the swirling "smoke" of slowly flowing veins, taken at −30 to −40 dB
+//! (no published level was found). The smoke is a unit-power complex speckle at
 //! [`crate::TextureConfig::smoke_db`] re muscle's mean echo at each depth,
 //! added to the echo before the attenuation inside the patent lumen of the
 //! studied vein. The flow runs along the vein, across the image plane: the

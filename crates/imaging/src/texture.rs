@@ -53,10 +53,11 @@ pub struct TextureConfig {
     /// ([`crate::smoke`]). Default false: it shows on scanners only at slow
     /// flow and high gain; a case or page switches it on.
     pub smoke: bool,
-    /// Mean echo of the smoke relative to muscle (dB). Default −35 (the
-    /// −30 to −40 dB of blood's echo at low shear rates: Yuan & Shung 1988,
-    /// "Ultrasonic backscatter from flowing whole blood", JASA 84(1), rise
-    /// ≈ 15–20 dB over flowing blood's ≈ −50 dB as the shear rate falls).
+    /// Mean echo of the smoke relative to muscle (dB). Default −35, the
+    /// middle of the −30 to −40 dB asked for it (no published level was
+    /// found), where flowing blood lies at −50 dB (red cells aggregate
+    /// at low shear rates and blood's backscatter rises: Yuan & Shung 1988,
+    /// "Ultrasonic backscatter from flowing whole blood", JASA 84(1)).
     /// Accepted: −60 to −10.
     pub smoke_db: f64,
     /// Decorrelation time of the smoke's speckle (s): the elevation slice

@@ -40,6 +40,19 @@ fn lone_flat_septum(cfg: &ImagingConfig, sheets: &[Line]) -> Option<Line> {
         .copied()
 }
 
+/// A frame of `r` at rest.
+fn rest_frame(r: &mut Renderer) -> Vec<u8> {
+    let bone = r.anatomy().unwrap().femur_top();
+    let d = SectionDeformation::flat_press(0.0, r.config().probe_width, 1.5e-3, bone).unwrap();
+    let input = FrameInput {
+        deformation: &d,
+        probe_pressure: 0.0,
+        time: 0.0,
+        lateral_offset: 0.0,
+    };
+    r.render(&input).unwrap()
+}
+
 #[test]
 fn fat_septa_are_continuous_lines_brighter_than_fat() {
     // The first seed from 7 whose section has a lone flat septum.
@@ -56,20 +69,40 @@ fn fat_septa_are_continuous_lines_brighter_than_fat() {
         })
         .expect("a lone flat septum");
     let mut r = Renderer::new(&cfg, VeinState::Healthy).unwrap();
-    let d = SectionDeformation::flat_press(
-        0.0,
-        cfg.probe_width,
-        1.5e-3,
-        r.anatomy().unwrap().femur_top(),
-    )
-    .unwrap();
-    let input = FrameInput {
-        deformation: &d,
-        probe_pressure: 0.0,
-        time: 0.0,
-        lateral_offset: 0.0,
+    let frame = rest_frame(&mut r);
+    check_septum(&cfg, &r, &frame, &septum, &sheets);
+}
+
+#[test]
+fn fat_septa_are_continuous_in_the_3d_field_too() {
+    // The tissue's material field (window at lateral 0: its frame is the
+    // image's), the septa of its tiles.
+    let (cfg, septum, sheets) = (7..40)
+        .find_map(|seed| {
+            let cfg = ImagingConfig {
+                seed,
+                ..Default::default()
+            };
+            let half = 0.5 * cfg.width + 1e-2;
+            let deep = ScattererField::max_depth(&cfg);
+            let (_, sheets) =
+                crate::material::material_lines(cfg.seed, &cfg.texture, -half, half, 0.0, deep);
+            lone_flat_septum(&cfg, &sheets).map(|l| (cfg, l, sheets))
+        })
+        .expect("a lone flat septum");
+    let window = MaterialWindow {
+        lateral: 0.0,
+        elevation: 0.0,
+        margin: 0.0,
     };
-    let frame = r.render(&input).unwrap();
+    let mut r = Renderer::in_tissue(&cfg, VeinState::Healthy, window).unwrap();
+    let frame = rest_frame(&mut r);
+    check_septum(&cfg, &r, &frame, &septum, &sheets);
+}
+
+/// Along `septum` in `frame` (middle 80 % of its span): the echo's CV and
+/// its level over the fat 0.5-1.5 mm around it.
+fn check_septum(cfg: &ImagingConfig, r: &Renderer, frame: &[u8], septum: &Line, sheets: &[Line]) {
     let (w, dz, dr) = (cfg.columns, cfg.pixel_depth(), cfg.dynamic_range);
     let px = |j: usize, i: usize| intensity(frame[i * w + j], dr);
     let (u0, u1) = (septum.a.0.min(septum.b.0), septum.a.0.max(septum.b.0));
@@ -84,7 +117,7 @@ fn fat_septa_are_continuous_lines_brighter_than_fat() {
     };
     for j in 0..w {
         let u = r.column_lateral(j);
-        let Some(depth) = septum_depth(&septum, u).filter(|_| (lo..hi).contains(&u)) else {
+        let Some(depth) = septum_depth(septum, u).filter(|_| (lo..hi).contains(&u)) else {
             continue;
         };
         let row = (depth / dz - 0.5).round() as usize;
