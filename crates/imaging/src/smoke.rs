@@ -5,7 +5,7 @@
 //! Shung 1988, "Ultrasonic backscatter from flowing whole blood", JASA
 //! 84(1)), from the ≈ −50 dB re muscle of flowing blood in this model to
 //! the swirling "smoke" of slowly flowing veins, taken at −30 to −40 dB
-//! (no published level was found). The smoke is a unit-power complex speckle at
+//! (no published level was found; −32 dB by default). The smoke is a unit-power complex speckle at
 //! [`crate::TextureConfig::smoke_db`] re muscle's mean echo at each depth,
 //! added to the echo before the attenuation inside the patent lumen of the
 //! studied vein. The flow runs along the vein, across the image plane: the
