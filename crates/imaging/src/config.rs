@@ -28,6 +28,8 @@
 use crate::anatomy_config::AnatomyConfig;
 use crate::beam_config::BeamConfig;
 use crate::error::ImagingError;
+use crate::reverberation::ReverbConfig;
+use crate::texture::TextureConfig;
 use serde::{Deserialize, Serialize};
 
 /// Full width at half maximum of a Gaussian divided by its σ: `2 √(2 ln 2)`.
@@ -109,6 +111,10 @@ pub struct ImagingConfig {
     pub beam: BeamConfig,
     /// The anatomy of the section (`[imaging.anatomy]`).
     pub anatomy: AnatomyConfig,
+    /// Tissue textures and the smoke option (`[imaging.texture]`).
+    pub texture: TextureConfig,
+    /// Near-field and lumen reverberation (`[imaging.reverberation]`).
+    pub reverberation: ReverbConfig,
 }
 
 impl Default for ImagingConfig {
@@ -134,6 +140,8 @@ impl Default for ImagingConfig {
             pan_range: 0.050,
             beam: BeamConfig::default(),
             anatomy: AnatomyConfig::default(),
+            texture: TextureConfig::default(),
+            reverberation: ReverbConfig::default(),
         }
     }
 }
@@ -282,6 +290,9 @@ impl ImagingConfig {
             ));
         }
         self.beam.validate(&format!("{prefix}.beam"))?;
+        self.texture.validate(&format!("{prefix}.texture"))?;
+        self.reverberation
+            .validate(&format!("{prefix}.reverberation"))?;
         self.anatomy.validate(&format!("{prefix}.anatomy"))
     }
 

@@ -13,8 +13,11 @@
 //! - [`Renderer`]: scatterers fixed in tissue, complex-baseband PSF of a
 //!   focused linear array ([`BeamConfig`]: transmit focus, dynamic receive,
 //!   elevation slice, spectral down-shift; tabulated per depth once),
-//!   envelope, attenuation, clutter and electronic noise, TGC, log
-//!   compression; allocation-free [`Renderer::render_into`].
+//!   envelope, near-field and lumen reverberation ([`ReverbConfig`]),
+//!   attenuation, clutter and electronic noise, TGC, log compression;
+//!   allocation-free [`Renderer::render_into`].
+//! - [`TextureConfig`]: muscle's transverse "starry sky", the fat's
+//!   coherent septa, the veins' slow-flow smoke (an option).
 //! - [`measure_psf`]: the standard point phantom's FWHM, focal gain and
 //!   side lobes; [`Phantom`]: points, speckle, cyst.
 //! - PNG output of a frame: [`write_gray_png`].
@@ -47,10 +50,13 @@ pub mod pressure;
 mod psf;
 mod pulse;
 mod render;
+mod reverberation;
 mod scatterers;
+mod smoke;
 mod stages;
 mod structure_config;
 mod target_band;
+mod texture;
 mod tissue;
 mod vein_condition;
 mod warp;
@@ -66,8 +72,10 @@ pub use measure::{axis_column, fwhm_samples, measure_psf, PsfAtDepth, PsfReport,
 pub use output::write_gray_png;
 pub use post_thrombotic::{PostThrombotic, IRREGULAR_THICKENING, WEB_THICKNESS};
 pub use render::{FrameInput, Lumen, LumenReport, Phantom, Renderer};
+pub use reverberation::ReverbConfig;
 pub use structure_config::{StructureConfig, StructureKind, MAX_STRUCTURES};
 pub use target_band::{TargetBand, ARTERY_CLEARLY_OVAL};
+pub use texture::TextureConfig;
 pub use tissue::{Acoustics, Tissue};
 pub use vein_condition::{CollapseLaw, ContentLayout, VeinCondition, BREATHING_RATE, TAIL_SWING};
 pub use warp::VesselWarp;

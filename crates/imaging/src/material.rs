@@ -27,12 +27,15 @@
 //! the image's brightness does not change.
 //!
 //! Connective-tissue lines (fat septa, perimysium) are sheets along the
-//! elevation, drawn per 8 mm tile of `a` from the tile's own seed.
+//! elevation, drawn per 8 mm tile of `a` from the tile's own seed; the
+//! septa, coherent sheets, are one scatterer per column of weight 1 in
+//! every plane ([`crate::texture`]).
 
 use crate::anatomy::Anatomy;
 use crate::config::ImagingConfig;
 use crate::psf::PsfTables;
-use crate::scatterers::{lines, tissue_amplitude, LineIndex, ScattererField};
+use crate::scatterers::{tissue_amplitude, Line, LineIndex, ScattererField};
+use crate::texture::{self, TextureConfig};
 use crate::tissue::Tissue;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
@@ -131,14 +134,22 @@ fn cell_seed(seed: u64, a: i64, b: i64, tag: u64) -> u64 {
 }
 
 /// The material lines of the tiles that reach `[lo, hi]` (material lateral,
-/// m), in the window's frame (lateral minus `origin`), down to `deep` (m):
-/// septa (~1 per 12 mm², 3–12 mm, ±0.35 rad, +20 dB) brighten fat only,
-/// perimysium (~1 per 5 mm², 1–5 mm, ±0.5 rad, +9 dB) muscle only — the
-/// densities and gains of the 2-D field.
-fn material_lines(seed: u64, lo: f64, hi: f64, origin: f64, deep: f64) -> LineIndex {
+/// m), in the window's frame (lateral minus `origin`), down to `deep` (m),
+/// with the textures of `tex` ([`crate::texture`]): septa (~1 per 12 mm²,
+/// 3–12 mm) in fat only, perimysium in muscle only. Returns the index of
+/// the lines that brighten scatterers and the septa drawn as coherent
+/// sheets (empty unless `tex.coherent_septa`).
+pub(crate) fn material_lines(
+    seed: u64,
+    tex: &TextureConfig,
+    lo: f64,
+    hi: f64,
+    origin: f64,
+    deep: f64,
+) -> (LineIndex, Vec<Line>) {
     let t0 = (lo / LINE_TILE).floor() as i64 - 1;
     let t1 = (hi / LINE_TILE).floor() as i64 + 1;
-    let mut all = Vec::new();
+    let (mut all, mut sheets) = (Vec::new(), Vec::new());
     for t in t0..=t1 {
         let mut rng = ChaCha8Rng::seed_from_u64(cell_seed(seed, t, 0, 2));
         let (u0, u1) = (
@@ -146,32 +157,24 @@ fn material_lines(seed: u64, lo: f64, hi: f64, origin: f64, deep: f64) -> LineIn
             (t + 1) as f64 * LINE_TILE - origin,
         );
         let area = LINE_TILE * deep;
-        let mut septa = lines(
-            &mut rng,
-            (area / 12e-6).round() as usize,
-            (u0, u1),
-            (0.0, deep),
-            (3e-3, 12e-3),
-            0.35,
-            0.1e-3,
-            20.0,
-        );
-        septa.iter_mut().for_each(|l| l.only = Some(Tissue::Fat));
-        let mut peri = lines(
-            &mut rng,
-            (area / 5e-6).round() as usize,
-            (u0, u1),
-            (0.0, deep),
-            (1e-3, 5e-3),
-            0.5,
-            0.08e-3,
-            9.0,
-        );
-        peri.iter_mut().for_each(|l| l.only = Some(Tissue::Muscle));
-        all.extend(septa);
+        let septa = texture::septa(&mut rng, tex.coherent_septa, area, (u0, u1), (0.0, deep));
+        let peri = texture::perimysium(&mut rng, tex.muscle_fascicles, area, (u0, u1), (0.0, deep));
+        if tex.coherent_septa {
+            sheets.extend(septa);
+        } else {
+            all.extend(septa);
+        }
         all.extend(peri);
     }
-    LineIndex::new(all, deep)
+    let background = if tex.muscle_fascicles {
+        texture::fascicle_amplitude()
+    } else {
+        1.0
+    };
+    (
+        LineIndex::new(all, deep).with_muscle_background(background),
+        sheets,
+    )
 }
 
 impl ScattererField {
@@ -234,13 +237,15 @@ impl ScattererField {
         let m_origin = (window.lateral / dx).round() as i64;
         let origin = m_origin as f64 * dx;
         let m_first = m_origin - (halo + pan + cfg.columns / 2) as i64;
-        let lines = material_lines(
+        let (lines, sheets) = material_lines(
             cfg.seed,
+            &cfg.texture,
             origin + u_first - dx,
             origin + u_first + bins as f64 * dx,
             origin,
             dmax,
         );
+        let fat_db = anatomy.echo_of(Tissue::Fat, None).unwrap_or(0.0);
         let mut bin_start = Vec::with_capacity(bins + 1);
         let (mut depth, mut amp) = (Vec::new(), Vec::new());
         let (mut ys, mut inv, mut base) = (Vec::new(), Vec::new(), Vec::new());
@@ -282,6 +287,15 @@ impl ScattererField {
                             ));
                         }
                     }
+                }
+            }
+            // The septa's sheets: one coherent scatterer per column on each
+            // septum, the same in every plane (a sheet along the elevation:
+            // `1/(2σ²)` = 0, weight 1).
+            for d in sheets.iter().filter_map(|l| texture::septum_depth(l, uc)) {
+                if d > 0.0 && anatomy.classify(uc, d).0 == Tissue::Fat {
+                    let s = texture::septum_amplitude(tables, cfg.scatterer_density, fat_db, dz, d);
+                    col.push((d as f32, 0.0, 0.0, [s as f32, 0.0]));
                 }
             }
             col.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));

@@ -18,7 +18,9 @@ use crate::error::ImagingError;
 use crate::material::MaterialWindow;
 use crate::pressure::stress_under_rectangle;
 use crate::psf::PsfTables;
+use crate::reverberation::{LumenSpan, Reverberation};
 use crate::scatterers::ScattererField;
+use crate::smoke::{Smoke, SmokePhase, ROLL as SMOKE_ROLL};
 use crate::stages::{
     compress_column, convolve_column, splat_column, Additive, FrameGeometry, LogCompression,
 };
@@ -140,6 +142,44 @@ pub struct Renderer {
     /// Factor on the studied vein's (vessel 0's) lumen height: its
     /// Valsalva distension (issue 17), 1 at rest.
     vein_distension: f64,
+    /// Near-field and lumen reverberation (`None` for a phantom or when off).
+    reverb: Option<Reverberation>,
+    /// Slow-flow smoke in the studied vein (`None` unless switched on).
+    smoke: Option<Smoke>,
+    /// Muscle's mean echo amplitude per row at the scatterer density.
+    muscle_amp: Vec<f32>,
+    /// The vessels' lumens of the current frame (the first `lumen_count`).
+    lumens: [VesselLumen; MAX_VESSELS],
+    lumen_count: usize,
+    /// The smoke's fields at the frame's time, `None` when the studied
+    /// vein holds none (closed, thrombosed, or smoke off).
+    smoke_phase: Option<SmokePhase>,
+}
+
+/// A vessel's lumen in a frame (image frame, m).
+#[derive(Debug, Clone, Copy, Default)]
+struct VesselLumen {
+    lateral: f64,
+    depth: f64,
+    half_height: f64,
+    half_width: f64,
+    wall: f64,
+}
+
+impl VesselLumen {
+    /// The lumen's span in the column at lateral `u` (m, image frame), as
+    /// an ellipse of the lumen's half-width and half-height.
+    fn span(&self, u: f64) -> Option<LumenSpan> {
+        let x = (u - self.lateral) / self.half_width;
+        (x.abs() < 1.0 && self.half_height > 0.0).then(|| {
+            let h = self.half_height * (1.0 - x * x).sqrt();
+            LumenSpan {
+                top: self.depth - h,
+                bottom: self.depth + h,
+                wall: self.wall,
+            }
+        })
+    }
 }
 
 impl Renderer {
@@ -149,7 +189,7 @@ impl Renderer {
         cfg.validate("imaging")?;
         let anatomy = Anatomy::new(&cfg.anatomy, state)?;
         let tables = PsfTables::shared(cfg);
-        let field = ScattererField::from_anatomy(cfg, tables.lat_half, &anatomy);
+        let field = ScattererField::from_anatomy(cfg, &tables, &anatomy);
         Ok(Self::build(cfg, Some(anatomy), field, tables))
     }
 
@@ -288,6 +328,22 @@ impl Renderer {
             })
             .collect();
         let noise_amp = (muscle * 10f64.powf(cfg.beam.noise_db / 10.0)).sqrt() as f32;
+        let muscle_amp = tables
+            .speckle_unit
+            .iter()
+            .map(|&u| (cfg.scatterer_density * u).sqrt() as f32)
+            .collect();
+        // Fields of their own seeds: the clutter and noise stay as they were.
+        let reverb = (anatomy.is_some() && cfg.reverberation.enabled)
+            .then(|| Reverberation::new(&cfg.reverberation, cfg.seed ^ 0x0eeb_e4b0_u64));
+        let smoke = (anatomy.is_some() && cfg.texture.smoke).then(|| {
+            let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed ^ 0x005e_0c0e_u64);
+            Smoke::new(
+                smoothed_gaussian(&mut rng, cols + SMOKE_ROLL, rows, true),
+                cfg.texture.smoke_db,
+                cfg.texture.smoke_decorrelation,
+            )
+        });
         let lc = LogCompression {
             a: 10.0 * std::f32::consts::LOG10_2 * 255.0 / dr,
             b: (cfg.dynamic_range - white) as f32 * 255.0 / dr,
@@ -324,6 +380,12 @@ impl Renderer {
             loss_scratch: vec![0.0; cfg.rows],
             field,
             vein_distension: 1.0,
+            reverb,
+            smoke,
+            muscle_amp,
+            lumens: [VesselLumen::default(); MAX_VESSELS],
+            lumen_count: 0,
+            smoke_phase: None,
         }
     }
 
@@ -485,20 +547,37 @@ impl Renderer {
         self.noise_roll = tick.wrapping_mul(2_654_435_761) % NOISE_ROLL;
         check_input(input)?;
         let mut ratios = [1.0f64; MAX_VESSELS];
+        let mut lumens = [VesselLumen::default(); MAX_VESSELS];
         let n = match &self.anatomy {
             Some(a) => {
                 let vs = a.vessels();
                 for (i, r) in ratios.iter_mut().enumerate().take(vs.len()) {
-                    *r = self
-                        .lumen_of(&vs[i].vessel, input, face, |p| {
-                            a.lumen_ratio(i, p, input.time) * self.distension_of(i)
-                        })
-                        .area
-                        / vs[i].vessel.rest_area();
+                    let l = self.lumen_of(&vs[i].vessel, input, face, |p| {
+                        a.lumen_ratio(i, p, input.time) * self.distension_of(i)
+                    });
+                    *r = l.area / vs[i].vessel.rest_area();
+                    lumens[i] = VesselLumen {
+                        lateral: l.lateral,
+                        depth: l.depth,
+                        half_height: l.half_height,
+                        half_width: l.half_width,
+                        wall: vs[i].vessel.wall,
+                    };
                 }
                 vs.len().min(MAX_VESSELS)
             }
             None => 0,
+        };
+        self.lumens = lumens;
+        self.lumen_count = n;
+        // Smoke only in a patent studied vein (blood, not thrombus).
+        let patent = self
+            .anatomy
+            .as_ref()
+            .is_some_and(|a| a.state() == VeinState::Healthy && n > 0);
+        self.smoke_phase = match &self.smoke {
+            Some(s) if patent => Some(s.phase(input.time)),
+            _ => None,
         };
         for (b, &u_image) in self.bin_u.iter().enumerate() {
             let s = def.surface_at(u_image);
@@ -587,13 +666,25 @@ impl Renderer {
             roll: self.noise_roll,
             rows,
         };
+        let echoes = ExtraEchoes {
+            reverb: self.reverb.as_ref(),
+            smoke: self.smoke.as_ref().zip(self.smoke_phase),
+            lumens: &self.lumens[..self.lumen_count],
+            muscle: &self.muscle_amp,
+            pan: self.pan_columns as i64,
+            fascia: self.anatomy.as_ref().map_or(0.0, |a| {
+                let c = a.config();
+                c.skin_thickness + c.fat_thickness + c.fascia_thickness
+            }),
+        };
         for (j, (col, iq)) in self
             .gray
             .chunks_mut(rows)
-            .zip(self.iq.chunks(rows))
+            .zip(self.iq.chunks_mut(rows))
             .enumerate()
         {
             let b = j + h;
+            echoes.column(g, j, self.bin_u[b], self.surface[b], iq);
             compress_column(
                 &self.lc,
                 g,
@@ -699,6 +790,44 @@ fn check_input(input: &FrameInput) -> Result<(), ImagingError> {
         });
     }
     Ok(())
+}
+
+/// The echoes added to a column's scatterer echo before its attenuation:
+/// reverberation ([`crate::reverberation`]) and smoke ([`crate::smoke`]).
+struct ExtraEchoes<'a> {
+    reverb: Option<&'a Reverberation>,
+    smoke: Option<(&'a Smoke, SmokePhase)>,
+    lumens: &'a [VesselLumen],
+    muscle: &'a [f32],
+    /// The frame's pan (columns): image column `j` is tissue column `j + pan`.
+    pan: i64,
+    /// Depth of the deep fascia's bottom below the rest skin (m).
+    fascia: f64,
+}
+
+impl ExtraEchoes<'_> {
+    /// Adds them to column `j` (lateral `u`, m, image frame; skin
+    /// displacement `surface`, m).
+    #[inline(always)]
+    fn column(&self, g: &FrameGeometry, j: usize, u: f64, surface: f64, iq: &mut [[f32; 2]]) {
+        if let Some(r) = self.reverb {
+            r.near_field(
+                iq,
+                g.dz,
+                column_depth(surface, g.bone, self.fascia) - g.face,
+            );
+            for l in self.lumens {
+                if let Some(span) = l.span(u) {
+                    r.lumen(iq, j as i64 + self.pan, g.dz, self.muscle, span);
+                }
+            }
+        }
+        if let (Some((s, phase)), Some(vein)) = (self.smoke, self.lumens.first()) {
+            if let Some(span) = vein.span(u) {
+                s.add(iq, j, phase, g.dz, self.muscle, (span.top, span.bottom));
+            }
+        }
+    }
 }
 
 /// The frame's clutter and noise fields, shared by the column stages.

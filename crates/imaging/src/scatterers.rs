@@ -14,6 +14,8 @@
 
 use crate::anatomy::Anatomy;
 use crate::config::ImagingConfig;
+use crate::psf::PsfTables;
+use crate::texture;
 use crate::tissue::Tissue;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -125,6 +127,9 @@ pub(crate) struct LineIndex {
     cols: usize,
     rows: usize,
     cells: Vec<Vec<u32>>,
+    /// Amplitude of muscle between the lines (the fascicle background of
+    /// [`crate::texture`], 1 for the former texture).
+    muscle_background: f64,
 }
 
 impl LineIndex {
@@ -161,12 +166,29 @@ impl LineIndex {
             cols,
             rows,
             cells,
+            muscle_background: 1.0,
         }
     }
 
+    /// The index with muscle's background amplitude set to `amplitude`.
+    pub fn with_muscle_background(mut self, amplitude: f64) -> Self {
+        self.muscle_background = amplitude;
+        self
+    }
+
     /// Amplitude gain at `(u, d)` in `tissue`: the largest of the lines
-    /// through it, else 1.
+    /// through it, else 1; times the muscle's background in muscle.
     fn boost(&self, u: f64, d: f64, tissue: Tissue) -> f64 {
+        let background = if tissue == Tissue::Muscle {
+            self.muscle_background
+        } else {
+            1.0
+        };
+        background * self.line_gain(u, d, tissue)
+    }
+
+    /// The largest gain of the lines through `(u, d)` in `tissue`, else 1.
+    fn line_gain(&self, u: f64, d: f64, tissue: Tissue) -> f64 {
         let k = (u - self.u0) / Self::CELL;
         if !(k >= 0.0 && (k as usize) < self.cols) || d < 0.0 {
             return 1.0;
@@ -229,6 +251,7 @@ impl ScattererField {
         density: f64,
         rng: &mut ChaCha8Rng,
         mut amplitude: impl FnMut(f64, f64) -> Option<f64>,
+        mut sheets: impl FnMut(f64, &mut Vec<(f32, [f32; 2])>),
     ) -> Self {
         let (halo, pan, bins, u_first) = Self::bins(cfg, halo);
         let dx = cfg.pixel_width();
@@ -266,6 +289,7 @@ impl ScattererField {
                     col.push((d as f32, [(re * s) as f32, (im * s) as f32]));
                 }
             }
+            sheets(uc, &mut col);
             col.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
             for &(d, a) in &col {
                 depth.push(d);
@@ -284,10 +308,17 @@ impl ScattererField {
         }
     }
 
-    /// The scatterers of `anatomy`, at the density of `cfg`, seeded by `cfg.seed`.
-    pub fn from_anatomy(cfg: &ImagingConfig, halo: usize, anatomy: &Anatomy) -> Self {
+    /// The connective-tissue lines of the 2-D section of `anatomy` drawn
+    /// from `rng` with the textures of `cfg.texture`: the lines that
+    /// brighten scatterers (with muscle's background amplitude) and the
+    /// septa drawn as coherent sheets (empty unless `coherent_septa`).
+    pub(crate) fn section_lines(
+        cfg: &ImagingConfig,
+        anatomy: &Anatomy,
+        rng: &mut ChaCha8Rng,
+    ) -> (LineIndex, Vec<Line>) {
         let a = anatomy.config();
-        let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+        let tex = &cfg.texture;
         let half = 0.5 * cfg.width + cfg.pan_columns() as f64 * cfg.pixel_width() + 2e-3;
         let fat = (
             a.skin_thickness + 0.3e-3,
@@ -295,39 +326,69 @@ impl ScattererField {
         );
         let muscle_top = a.skin_thickness + a.fat_thickness;
         let deep = Self::max_depth(cfg);
-        // Septa: ~1 per 12 mm² of fat; perimysium: ~1 per 5 mm² of muscle.
-        let n_septa = (2.0 * half * a.fat_thickness / 12e-6).round() as usize;
-        let n_peri = (2.0 * half * (deep - muscle_top).max(0.0) / 5e-6).round() as usize;
-        let mut all = lines(
-            &mut rng,
-            n_septa,
+        let mut septa = texture::septa(
+            rng,
+            tex.coherent_septa,
+            2.0 * half * a.fat_thickness,
             (-half, half),
             fat,
-            (3e-3, 12e-3),
-            0.35,
-            0.1e-3,
-            20.0,
         );
-        all.extend(lines(
-            &mut rng,
-            n_peri,
+        let mut peri = texture::perimysium(
+            rng,
+            tex.muscle_fascicles,
+            2.0 * half * (deep - muscle_top).max(0.0),
             (-half, half),
             (muscle_top + 1e-3, deep),
-            (1e-3, 5e-3),
-            0.5,
-            0.08e-3,
-            9.0,
-        ));
-        let index = LineIndex::new(all, deep);
-        Self::generate(cfg, halo, cfg.scatterer_density, &mut rng, |u, d| {
-            tissue_amplitude(anatomy, &index, u, d)
-        })
+        );
+        let background = if tex.muscle_fascicles {
+            texture::fascicle_amplitude()
+        } else {
+            // The former 2-D texture, unchanged: lines for fat and muscle alike.
+            septa.iter_mut().for_each(|l| l.only = None);
+            peri.iter_mut().for_each(|l| l.only = None);
+            1.0
+        };
+        let sheets = if tex.coherent_septa {
+            std::mem::take(&mut septa)
+        } else {
+            Vec::new()
+        };
+        septa.extend(peri);
+        (
+            LineIndex::new(septa, deep).with_muscle_background(background),
+            sheets,
+        )
+    }
+
+    /// The scatterers of `anatomy`, at the density of `cfg`, seeded by
+    /// `cfg.seed`, with the textures of `cfg.texture` ([`crate::texture`]).
+    pub fn from_anatomy(cfg: &ImagingConfig, tables: &PsfTables, anatomy: &Anatomy) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(cfg.seed);
+        let (index, sheets) = Self::section_lines(cfg, anatomy, &mut rng);
+        let fat_db = anatomy.echo_of(Tissue::Fat, None).unwrap_or(0.0);
+        let dz = cfg.pixel_depth();
+        Self::generate(
+            cfg,
+            tables.lat_half,
+            cfg.scatterer_density,
+            &mut rng,
+            |u, d| tissue_amplitude(anatomy, &index, u, d),
+            |u, col| {
+                for d in sheets.iter().filter_map(|l| texture::septum_depth(l, u)) {
+                    if anatomy.classify(u, d).0 == Tissue::Fat {
+                        let amp =
+                            texture::septum_amplitude(tables, cfg.scatterer_density, fat_db, dz, d);
+                        col.push((d as f32, [amp as f32, 0.0]));
+                    }
+                }
+            },
+        )
     }
 
     /// A homogeneous medium of `density` scatterers per m² with unit power.
     pub fn uniform(cfg: &ImagingConfig, halo: usize, density: f64, seed: u64) -> Self {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        Self::generate(cfg, halo, density, &mut rng, |_, _| Some(1.0))
+        Self::generate(cfg, halo, density, &mut rng, |_, _| Some(1.0), |_, _| {})
     }
 
     /// As [`uniform`](Self::uniform), without scatterers inside the circle
@@ -342,9 +403,14 @@ impl ScattererField {
         radius: f64,
     ) -> Self {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        Self::generate(cfg, halo, density, &mut rng, |u, d| {
-            ((u - centre.0).hypot(d - centre.1) > radius).then_some(1.0)
-        })
+        Self::generate(
+            cfg,
+            halo,
+            density,
+            &mut rng,
+            |u, d| ((u - centre.0).hypot(d - centre.1) > radius).then_some(1.0),
+            |_, _| {},
+        )
     }
 
     /// Unit point scatterers at `(column, depth)` (image column index at

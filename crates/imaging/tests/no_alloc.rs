@@ -37,7 +37,8 @@ fn render_into_does_not_allocate() {
 
 /// The same with a section of many structures (the 3D leg's: extra veins
 /// and arteries, a muscle outline, a lymph node), pressed hard enough to
-/// collapse the veins and deform the arteries.
+/// collapse the veins and deform the arteries, and the veins' slow-flow
+/// smoke switched on.
 #[test]
 fn render_into_with_extra_structures_does_not_allocate() {
     let mut cfg = ImagingConfig {
@@ -62,6 +63,7 @@ fn render_into_with_extra_structures_does_not_allocate() {
         st("sartorius", StructureKind::Muscle, -0.010, 0.016, 8e-3),
         st("lymph_node", StructureKind::LymphNode, 0.015, 0.020, 4e-3),
     ];
+    cfg.texture.smoke = true;
     let mut r = Renderer::new(&cfg, VeinState::Healthy).unwrap();
     assert_eq!(r.anatomy().unwrap().vessels().len(), 5);
     let bone = r.anatomy().unwrap().femur_top();
