@@ -53,6 +53,9 @@ struct Edge {
     u: f64,
     /// Image depth where the shadow starts (m).
     z: f64,
+    /// Image depth of the vessel's top (m): the shallowest depth its
+    /// lumen changes the loss.
+    top: f64,
     /// Core loss (Np of amplitude).
     np: f64,
 }
@@ -78,21 +81,31 @@ impl EdgeShadows {
     }
 
     /// Adds the margin at lateral `u` (m, image frame) and image depth `z`
-    /// (m) of a lumen whose area is `ratio` of its rest area.
-    pub fn push(&mut self, u: f64, z: f64, ratio: f64) {
+    /// (m) of a vessel whose top lies at image depth `top` (m) and whose
+    /// lumen's area is `ratio` of its rest area.
+    pub fn push(&mut self, u: f64, z: f64, top: f64, ratio: f64) {
         let fade = (ratio / SHADOW_FADE).clamp(0.0, 1.0);
         if self.n < MAX_EDGES && fade > 0.0 && u.is_finite() && z.is_finite() {
             let np = SHADOW_DB * fade * std::f64::consts::LN_10 / 20.0;
-            self.edges[self.n] = Edge { u, z, np };
+            self.edges[self.n] = Edge { u, z, top, np };
             self.n += 1;
         }
     }
 
-    /// Whether a margin lies within `reach` (m) of lateral `u` (m, image frame).
-    pub fn near(&self, u: f64, reach: f64) -> bool {
+    /// The distance (m) from lateral `u` (m, image frame) to the nearest
+    /// margin, and the shallowest top (m) of the vessels with a margin
+    /// within `reach` (m); `None` if no margin is within `reach`.
+    pub fn near(&self, u: f64, reach: f64) -> Option<(f64, f64)> {
         self.edges[..self.n]
             .iter()
-            .any(|e| (u - e.u).abs() <= reach)
+            .filter(|e| (u - e.u).abs() <= reach)
+            .fold(None, |acc, e| {
+                let d = (u - e.u).abs();
+                Some(match acc {
+                    None => (d, e.top),
+                    Some((d0, t0)) => (d.min(d0), e.top.min(t0)),
+                })
+            })
     }
 
     /// The margins within `4σ` of the column at lateral `u` (m, image
@@ -138,7 +151,7 @@ mod tests {
     #[test]
     fn shadow_below_the_margin_only() {
         let mut s = EdgeShadows::default();
-        s.push(5e-3, 20e-3, 1.0);
+        s.push(5e-3, 20e-3, 15e-3, 1.0);
         let core = s.column(5e-3);
         let full = SHADOW_DB * std::f64::consts::LN_10 / 20.0;
         assert_eq!(core.loss_np(19e-3), 0.0);
@@ -148,7 +161,7 @@ mod tests {
         assert!(s.column(5e-3 + 2.1e-3).is_empty());
         // A closed lumen leaves no shadow.
         s.clear();
-        s.push(5e-3, 20e-3, 0.0);
+        s.push(5e-3, 20e-3, 15e-3, 0.0);
         assert!(s.column(5e-3).is_empty());
     }
 }

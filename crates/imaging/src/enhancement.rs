@@ -29,6 +29,8 @@ const MAX_HALF: usize = 24;
 pub(crate) struct LossBlur {
     /// Half-width `K` of the weights (columns), the largest of the rows'.
     pub half: usize,
+    /// Each row's own half-width (columns).
+    row_half: Vec<usize>,
     /// `weights[i · (2K + 1) + k + K]`, normalized to sum 1 in each row.
     weights: Vec<f64>,
 }
@@ -38,7 +40,7 @@ impl LossBlur {
     pub fn new(t: &PsfTables, rows: usize) -> Self {
         let lim = (t.lat_half).min(MAX_HALF) as i64;
         let intensity = |k: i64, i: usize| (t.lateral_at(k, i) as f64).powi(2);
-        let half = (0..rows)
+        let row_half: Vec<usize> = (0..rows)
             .map(|i| {
                 let peak = intensity(0, i);
                 (0..=lim)
@@ -46,38 +48,61 @@ impl LossBlur {
                     .last()
                     .unwrap_or(0) as usize
             })
-            .max()
-            .unwrap_or(0);
+            .collect();
+        let half = row_half.iter().copied().max().unwrap_or(0);
         let n = 2 * half + 1;
         let mut weights = vec![0.0; rows * n];
         for (i, w) in weights.chunks_mut(n).enumerate() {
-            let peak = intensity(0, i);
-            for (kk, wk) in w.iter_mut().enumerate() {
-                let v = intensity(kk as i64 - half as i64, i);
-                *wk = if v >= LOBE_CUT * peak { v } else { 0.0 };
+            let h = row_half[i];
+            for (kk, wk) in w.iter_mut().enumerate().skip(half - h).take(2 * h + 1) {
+                *wk = intensity(kk as i64 - half as i64, i);
             }
             let sum: f64 = w.iter().sum();
             if sum > 0.0 {
                 w.iter_mut().for_each(|x| *x /= sum);
             }
         }
-        LossBlur { half, weights }
+        LossBlur {
+            half,
+            row_half,
+            weights,
+        }
     }
 
-    /// The averaged loss of column `j` into `out` (one value per row) from
-    /// the loss exponents of every column, `loss[c · rows + i]`
-    /// (`columns = loss.len() / rows`); columns past the image's edges are
-    /// taken as the edge column.
-    pub fn column(&self, loss: &[f64], rows: usize, j: usize, out: &mut [f64]) {
+    /// The loss of column `j` into `out` (one value per row) from the loss
+    /// exponents of every column, `loss[c · rows + i]` (`columns =
+    /// loss.len() / rows`; columns past the image's edges are taken as the
+    /// edge column): averaged in the rows whose main lobe, widened by
+    /// `margin` columns, reaches the nearest vessel margin `distance`
+    /// columns away, from row `start` down (the vessels' top), the
+    /// column's own elsewhere (its neighbours see the same loss there).
+    #[allow(clippy::too_many_arguments)]
+    pub fn column(
+        &self,
+        loss: &[f64],
+        rows: usize,
+        j: usize,
+        distance: f64,
+        margin: f64,
+        start: usize,
+        out: &mut [f64],
+    ) {
         let cols = loss.len() / rows;
         let n = 2 * self.half + 1;
-        out.fill(0.0);
-        for kk in 0..n {
-            let c = (j + kk).saturating_sub(self.half).min(cols - 1);
-            let src = &loss[c * rows..(c + 1) * rows];
-            for (i, (o, &x)) in out.iter_mut().zip(src).enumerate() {
-                *o += self.weights[i * n + kk] * x;
+        for (i, o) in out.iter_mut().enumerate().take(rows) {
+            let h = self.row_half[i];
+            if i < start || distance > (h + 1) as f64 + margin {
+                *o = loss[j * rows + i];
+                continue;
             }
+            let w = &self.weights[i * n..(i + 1) * n];
+            let mut acc = 0.0;
+            let first = self.half - h;
+            for (kk, &wk) in w.iter().enumerate().skip(first).take(2 * h + 1) {
+                let c = (j + kk).saturating_sub(self.half).min(cols - 1);
+                acc += wk * loss[c * rows + i];
+            }
+            *o = acc;
         }
     }
 }
@@ -111,7 +136,7 @@ mod tests {
             .map(|k| if k / rows < cols / 2 { -1.0 } else { 0.0 })
             .collect();
         let mut out = vec![0.0; rows];
-        b.column(&loss, rows, cols / 2, &mut out);
+        b.column(&loss, rows, cols / 2, 0.0, 0.0, 0, &mut out);
         let i = row(30e-3);
         assert!(out[i] < 0.0 && out[i] > -1.0, "{}", out[i]);
     }

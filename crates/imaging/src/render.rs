@@ -565,6 +565,12 @@ impl Renderer {
         for (sv, &r) in a.vessels().iter().zip(ratios) {
             let v = &sv.vessel;
             let hw = v.half_width();
+            // The vessel's top in the image, through the column at its
+            // centre, 1 mm higher for the chord's rise off the centre
+            // line in a rotated vessel.
+            let (c, h) = v.chord(v.lateral, v.wall);
+            let bc = (((v.lateral - pan_m - u0) / dx).round().max(0.0) as usize).min(last);
+            let top = image_depth(&self.geometry, self.surface[bc], &self.warps[bc], c - h) - 1e-3;
             for s in [-1.0, 1.0] {
                 // 10 µm inside the margin, where the chord exists.
                 let ua = v.lateral + s * (hw - 1e-5);
@@ -572,7 +578,7 @@ impl Renderer {
                 let b = (((ui - u0) / dx).round().max(0.0) as usize).min(last);
                 let d = v.chord(ua, 0.0).0;
                 let z = image_depth(&self.geometry, self.surface[b], &self.warps[b], d);
-                self.shadows.push(ui, z, r);
+                self.shadows.push(ui, z, top, r);
             }
         }
     }
@@ -677,7 +683,8 @@ impl Renderer {
                 x,
             );
         }
-        let reach = (self.blur.half + 1) as f64 * self.cfg.pixel_width() + BLUR_MARGIN;
+        let dx = self.cfg.pixel_width();
+        let reach = (self.blur.half + 1) as f64 * dx + BLUR_MARGIN;
         for (j, (col, iq)) in self
             .gray
             .chunks_mut(rows)
@@ -689,9 +696,12 @@ impl Renderer {
             let shadow = self.shadows.column(u);
             let own = &self.loss[j * rows..(j + 1) * rows];
             let scratch = &mut self.loss_scratch;
-            let x: &[f64] = if near || !shadow.is_empty() {
-                if near {
-                    self.blur.column(&self.loss, rows, j, scratch);
+            let x: &[f64] = if near.is_some() || !shadow.is_empty() {
+                if let Some((distance, top)) = near {
+                    let m = BLUR_MARGIN / dx;
+                    let start = ((top / g.dz).max(0.0) as usize).min(rows);
+                    self.blur
+                        .column(&self.loss, rows, j, distance / dx, m, start, scratch);
                 } else {
                     scratch.copy_from_slice(own);
                 }
