@@ -706,9 +706,7 @@ impl Renderer {
                     scratch.copy_from_slice(own);
                 }
                 if !shadow.is_empty() {
-                    for (i, v) in scratch.iter_mut().enumerate() {
-                        *v += shadow.loss_np((i as f64 + 0.5) * g.dz);
-                    }
+                    shadow.add_to(scratch, g.dz);
                 }
                 scratch
             } else {
