@@ -118,6 +118,13 @@ impl Vessel {
         (self.radius.powi(2) * cs * cs + self.radius_b.powi(2) * sn * sn).sqrt()
     }
 
+    /// Half of the lateral extent (m) of the lumen grown by `grow` (m).
+    pub fn chord_half_width(&self, grow: f64) -> f64 {
+        let (sn, cs) = self.angle.sin_cos();
+        let (a, b) = (self.radius + grow, self.radius_b + grow);
+        (a * a * cs * cs + b * b * sn * sn).sqrt()
+    }
+
     /// Half of the lumen's vertical extent (m).
     pub fn half_height(&self) -> f64 {
         let (sn, cs) = self.angle.sin_cos();
@@ -344,6 +351,13 @@ impl Anatomy {
             LumenLaw::Vein(c) => c.lumen_ratio(pressure),
             LumenLaw::Artery => self.artery_lumen_ratio(pressure, time),
         }
+    }
+
+    /// The outlines of the muscles among the structures (their fascia).
+    pub(crate) fn muscle_outlines(&self) -> impl Iterator<Item = &Vessel> {
+        self.others
+            .iter()
+            .filter_map(|(k, v)| (*k == StructureKind::Muscle).then_some(v))
     }
 
     /// Depth of the femur's top below the undeformed skin (m), the default

@@ -18,6 +18,9 @@
 //!   allocation-free [`Renderer::render_into`].
 //! - [`TextureConfig`]: muscle's transverse "starry sky", the fat's
 //!   coherent septa, the veins' slow-flow smoke (an option).
+//! - Specular interfaces (fascia, vessel walls, the artery's intima–media
+//!   double line) as coherent lines with an angle-dependent echo, and
+//!   refraction edge shadows below the vessels' lateral margins.
 //! - [`measure_psf`]: the standard point phantom's FWHM, focal gain and
 //!   side lobes; [`Phantom`]: points, speckle, cyst.
 //! - PNG output of a frame: [`write_gray_png`].
@@ -41,6 +44,8 @@ mod beam;
 mod beam_config;
 mod config;
 mod deformation;
+mod edge_shadow;
+mod enhancement;
 mod error;
 mod material;
 mod measure;
@@ -53,6 +58,7 @@ mod render;
 mod reverberation;
 mod scatterers;
 mod smoke;
+mod specular;
 mod stages;
 mod structure_config;
 mod target_band;
@@ -66,6 +72,7 @@ pub use anatomy_config::{AnatomyConfig, VeinState, VeinStateParams, MMHG};
 pub use beam_config::BeamConfig;
 pub use config::{ImagingConfig, FWHM_PER_SIGMA};
 pub use deformation::{column_depth, SectionDeformation};
+pub use edge_shadow::{SHADOW_DB, SHADOW_FADE, SHADOW_LENGTH, SHADOW_ONSET, SHADOW_WIDTH};
 pub use error::ImagingError;
 pub use material::{MaterialWindow, SLAB_SIGMAS, SLICE};
 pub use measure::{axis_column, fwhm_samples, measure_psf, PsfAtDepth, PsfReport, POINT_DEPTHS};
@@ -73,6 +80,7 @@ pub use output::write_gray_png;
 pub use post_thrombotic::{PostThrombotic, IRREGULAR_THICKENING, WEB_THICKNESS};
 pub use render::{FrameInput, Lumen, LumenReport, Phantom, Renderer};
 pub use reverberation::ReverbConfig;
+pub use specular::INTIMA_MEDIA;
 pub use structure_config::{StructureConfig, StructureKind, MAX_STRUCTURES};
 pub use target_band::{TargetBand, ARTERY_CLEARLY_OVAL};
 pub use texture::TextureConfig;

@@ -14,6 +14,8 @@ use crate::anatomy::{Anatomy, Vessel};
 use crate::anatomy_config::VeinState;
 use crate::config::ImagingConfig;
 use crate::deformation::{column_depth, SectionDeformation};
+use crate::edge_shadow::EdgeShadows;
+use crate::enhancement::LossBlur;
 use crate::error::ImagingError;
 use crate::material::MaterialWindow;
 use crate::pressure::stress_under_rectangle;
@@ -21,8 +23,10 @@ use crate::psf::PsfTables;
 use crate::reverberation::{LumenSpan, Reverberation};
 use crate::scatterers::ScattererField;
 use crate::smoke::{Smoke, SmokePhase, ROLL as SMOKE_ROLL};
+use crate::specular::SpecularField;
 use crate::stages::{
-    compress_column, convolve_column, splat_column, Additive, FrameGeometry, LogCompression,
+    column_loss, compress_column, convolve_column, image_depth, splat_add, splat_column, Additive,
+    FrameGeometry, LogCompression,
 };
 use crate::warp::{compensated_ratio, VesselWarp, WarpSet, MAX_VESSELS};
 use rand::SeedableRng;
@@ -103,6 +107,12 @@ pub enum Phantom {
     },
 }
 
+/// Lateral reach (m) beyond the beam's main lobe of the averaging of the
+/// loss about each vessel margin ([`crate::enhancement`]): the lumen's
+/// chord, hence its enhancement, changes fastest within ≈ 0.5 mm of its
+/// lateral extreme (`h ∝ √(a² − x²)`).
+const BLUR_MARGIN: f64 = 0.5e-3;
+
 /// Columns of noise beyond the image's, over which the noise field rolls
 /// from frame to frame.
 const NOISE_ROLL: usize = 61;
@@ -113,6 +123,10 @@ pub struct Renderer {
     cfg: ImagingConfig,
     anatomy: Option<Anatomy>,
     field: ScattererField,
+    /// Specular interfaces (empty for a phantom), binned as `field`.
+    specular: SpecularField,
+    /// This frame's refraction edge shadows.
+    shadows: EdgeShadows,
     tables: Arc<PsfTables>,
     lc: LogCompression,
     /// Unit-power diffuse clutter, column-major like `iq`.
@@ -136,8 +150,12 @@ pub struct Renderer {
     rf: Vec<[f32; 2]>,
     iq: Vec<[f32; 2]>,
     gray: Vec<u8>,
-    /// One column's round-trip loss exponents (Np), for the compression.
+    /// Round-trip loss exponents (Np) of every column, column-major.
+    loss: Vec<f64>,
+    /// One column's loss exponents as the beam sees them, for the compression.
     loss_scratch: Vec<f64>,
+    /// The lateral averaging of the loss near the vessels' margins.
+    blur: LossBlur,
     geometry: FrameGeometry,
     /// Factor on the studied vein's (vessel 0's) lumen height: its
     /// Valsalva distension (issue 17), 1 at rest.
@@ -310,6 +328,12 @@ impl Renderer {
         let bin_u = (0..bins)
             .map(|b| -0.5 * cfg.width + (b as f64 - field.halo as f64 + 0.5) * dx)
             .collect();
+        let (_, _, field_bins, u_first) = ScattererField::bins(cfg, field.halo);
+        let specular = match &anatomy {
+            Some(a) => SpecularField::new(cfg, &tables, a, field_bins, u_first),
+            None => SpecularField::new_empty(field_bins),
+        };
+        let blur = LossBlur::new(&tables, cfg.rows);
         let dr = cfg.dynamic_range as f32;
         let muscle = cfg.scatterer_density * tables.speckle_unit[tables.focus_row];
         let white = 10.0 * muscle.log10() + cfg.headroom;
@@ -361,6 +385,8 @@ impl Renderer {
             },
             cfg: cfg.clone(),
             anatomy,
+            specular,
+            shadows: EdgeShadows::default(),
             tables,
             lc,
             clutter,
@@ -377,7 +403,9 @@ impl Renderer {
             rf: vec![[0.0; 2]; bins * padded_rows],
             iq: vec![[0.0; 2]; cfg.columns * cfg.rows],
             gray: vec![0; cfg.columns * cfg.rows],
+            loss: vec![0.0; cfg.columns * cfg.rows],
             loss_scratch: vec![0.0; cfg.rows],
+            blur,
             field,
             vein_distension: 1.0,
             reverb,
@@ -598,7 +626,40 @@ impl Renderer {
                 }
             }
         }
+        self.edge_shadows(&ratios[..n], pan_m);
         Ok(())
+    }
+
+    /// The refraction edge shadows of the frame ([`crate::edge_shadow`]):
+    /// the two lateral margins of each vessel (its wall's lateral extremes;
+    /// lumen area `ratios[i]` of rest), in the image through the column of
+    /// each margin.
+    fn edge_shadows(&mut self, ratios: &[f64], pan_m: f64) {
+        self.shadows.clear();
+        let Some(a) = &self.anatomy else {
+            return;
+        };
+        let dx = self.cfg.pixel_width();
+        let (u0, last) = (self.bin_u[0], self.bin_u.len() - 1);
+        for (sv, &r) in a.vessels().iter().zip(ratios) {
+            let v = &sv.vessel;
+            let hw = v.half_width();
+            // The vessel's top in the image, through the column at its
+            // centre, 1 mm higher for the chord's rise off the centre
+            // line in a rotated vessel.
+            let (c, h) = v.chord(v.lateral, v.wall);
+            let bc = (((v.lateral - pan_m - u0) / dx).round().max(0.0) as usize).min(last);
+            let top = image_depth(&self.geometry, self.surface[bc], &self.warps[bc], c - h) - 1e-3;
+            for s in [-1.0, 1.0] {
+                // 10 µm inside the margin, where the chord exists.
+                let ua = v.lateral + s * (hw - 1e-5);
+                let ui = v.lateral + s * v.chord_half_width(v.wall) - pan_m;
+                let b = (((ui - u0) / dx).round().max(0.0) as usize).min(last);
+                let d = v.chord(ua, 0.0).0;
+                let z = image_depth(&self.geometry, self.surface[b], &self.warps[b], d);
+                self.shadows.push(ui, z, top, r);
+            }
+        }
     }
 
     /// Renders one frame into `out` (`columns · rows` bytes, row-major, row
@@ -632,13 +693,22 @@ impl Renderer {
     /// instructions; the same floats).
     #[inline(always)]
     fn stages<const AVX2: bool>(&mut self, out: &mut [u8]) {
+        let w0 = self.window_start(self.pan_columns);
+        self.specular.prepare_frame(
+            &self.tables,
+            &self.geometry,
+            self.cfg.pixel_width(),
+            w0,
+            &self.surface,
+            &self.warps,
+        );
         let (t, g, f, pr) = (&*self.tables, &self.geometry, &self.field, self.padded_rows);
+        let sp = &self.specular;
         let elev = if f.points {
             &t.elev_point[..]
         } else {
             &t.elev_diffuse[..]
         };
-        let w0 = self.window_start(self.pan_columns);
         for (b, col) in self.rf.chunks_mut(pr).enumerate() {
             let r = f.bin_start[w0 + b] as usize..f.bin_start[w0 + b + 1] as usize;
             splat_column::<AVX2>(
@@ -647,6 +717,17 @@ impl Renderer {
                 elev,
                 &f.depth[r.clone()],
                 &f.amp[r],
+                self.surface[b],
+                &self.warps[b],
+                col,
+            );
+            let r = sp.range(w0 + b);
+            splat_add::<AVX2>(
+                t,
+                g,
+                &t.elev_diffuse,
+                &sp.depth[r.clone()],
+                &sp.amp[r],
                 self.surface[b],
                 &self.warps[b],
                 col,
@@ -677,26 +758,52 @@ impl Renderer {
                 c.skin_thickness + c.fat_thickness + c.fascia_thickness
             }),
         };
-        for (j, (col, iq)) in self
-            .gray
-            .chunks_mut(rows)
-            .zip(self.iq.chunks_mut(rows))
-            .enumerate()
-        {
+        // Loss exponents of every column, then each column's as the beam
+        // sees it near the vessels' margins (`crate::enhancement`), with
+        // the edge shadows, and the compression.
+        for (j, x) in self.loss.chunks_mut(rows).enumerate() {
             let b = j + h;
-            echoes.column(g, j, self.bin_u[b], self.surface[b], iq);
-            compress_column(
+            column_loss(
                 &self.lc,
                 g,
                 self.anatomy.as_ref(),
                 self.bin_u[b] + pan_m,
                 self.surface[b],
                 &self.warps[b],
-                iq,
-                &adds.column(j),
-                &mut self.loss_scratch,
-                col,
+                x,
             );
+        }
+        let dx = self.cfg.pixel_width();
+        let reach = (self.blur.half + 1) as f64 * dx + BLUR_MARGIN;
+        for (j, (col, iq)) in self
+            .gray
+            .chunks_mut(rows)
+            .zip(self.iq.chunks_mut(rows))
+            .enumerate()
+        {
+            echoes.column(g, j, self.bin_u[j + h], self.surface[j + h], iq);
+            let u = self.bin_u[j + h];
+            let near = self.shadows.near(u, reach);
+            let shadow = self.shadows.column(u);
+            let own = &self.loss[j * rows..(j + 1) * rows];
+            let scratch = &mut self.loss_scratch;
+            let x: &[f64] = if near.is_some() || !shadow.is_empty() {
+                if let Some((distance, top)) = near {
+                    let m = BLUR_MARGIN / dx;
+                    let start = ((top / g.dz).max(0.0) as usize).min(rows);
+                    self.blur
+                        .column(&self.loss, rows, j, distance / dx, m, start, scratch);
+                } else {
+                    scratch.copy_from_slice(own);
+                }
+                if !shadow.is_empty() {
+                    shadow.add_to(scratch, g.dz);
+                }
+                scratch
+            } else {
+                own
+            };
+            compress_column(&self.lc, g, iq, &adds.column(j), x, col);
         }
         let cols = self.cfg.columns;
         for (i, row) in out.chunks_mut(cols).enumerate() {

@@ -49,7 +49,7 @@ pub(crate) struct ScattererField {
 /// sends its echo `2θ` off the beam's axis, and the receive aperture (F#
 /// 1.7: half-angle ≈ 16°) collects it only for `2θ ≲ 16°` (Szabo 2014,
 /// ch. 3, reflection at a specular interface).
-const SPECULAR_LOBE: f64 = 8.0 * std::f64::consts::PI / 180.0;
+pub(crate) const SPECULAR_LOBE: f64 = 8.0 * std::f64::consts::PI / 180.0;
 /// Diffuse backscatter of the bone's surface relative to its specular echo
 /// (amplitude, −26 dB): a smooth cortex seen edge-on is a little brighter
 /// than muscle (+35 − 26 dB) over its thin attenuated layer.
@@ -206,8 +206,10 @@ impl LineIndex {
 
 /// RMS amplitude of a tissue scatterer at `(u, d)` (m, tissue
 /// coordinates): the tissue's mean backscatter, the bone's specular gain,
-/// the connective-tissue lines of `lines` in fat and muscle; `None` where
-/// nothing scatters (blood, lumen).
+/// the connective-tissue lines of `lines` in fat and muscle, the diffuse
+/// share of the tissues whose echo is a specular line
+/// ([`crate::specular::diffuse_factor`]); `None` where nothing scatters
+/// (blood, lumen).
 pub(crate) fn tissue_amplitude(
     anatomy: &Anatomy,
     lines: &LineIndex,
@@ -216,7 +218,8 @@ pub(crate) fn tissue_amplitude(
 ) -> Option<f64> {
     let (tissue, vessel) = anatomy.classify(u, d);
     let db = anatomy.echo_of(tissue, vessel)?;
-    let mut amp = 10f64.powf(db / 20.0);
+    let mut amp =
+        10f64.powf(db / 20.0) * crate::specular::diffuse_factor(anatomy, tissue, vessel, u, d);
     if tissue == Tissue::Cortex {
         let (fu, fd) = anatomy.femur_centre();
         amp *= specular_gain((u - fu, d - fd));

@@ -35,14 +35,7 @@ pub(crate) fn image_depth(g: &FrameGeometry, surface: f64, warps: &WarpSet, dept
 /// registers of f64 lanes, on the stack (nothing allocated per frame).
 const SPLAT_BATCH: usize = 8;
 
-/// Adds the axial PSF of each scatterer of one bin into its padded column
-/// `out` (`rows + 2·pad` complex samples, cleared first), weighted by the
-/// elevation weight `elev` of its splat row (`row + pad`). The per-scatterer
-/// setup (depth through the deformation, row, sub-row, phase) is computed
-/// [`SPLAT_BATCH`] scatterers at a time, then their taps are added one
-/// scatterer after the other: the same float operations per scatterer, in
-/// the same order into `out`. `AVX2`: the caller runs with AVX2 enabled
-/// (see [`add_taps`]).
+/// Clears the padded column `out` and splats into it (see [`splat_add`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(crate) fn splat_column<const AVX2: bool>(
@@ -56,6 +49,29 @@ pub(crate) fn splat_column<const AVX2: bool>(
     out: &mut [[f32; 2]],
 ) {
     out.fill([0.0, 0.0]);
+    splat_add::<AVX2>(t, g, elev, depth, amp, surface, warps, out);
+}
+
+/// Adds the axial PSF of each scatterer of one bin into its padded column
+/// `out` (`rows + 2·pad` complex samples), weighted by the
+/// elevation weight `elev` of its splat row (`row + pad`). The per-scatterer
+/// setup (depth through the deformation, row, sub-row, phase) is computed
+/// [`SPLAT_BATCH`] scatterers at a time, then their taps are added one
+/// scatterer after the other: the same float operations per scatterer, in
+/// the same order into `out`. `AVX2`: the caller runs with AVX2 enabled
+/// (see [`add_taps`]).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn splat_add<const AVX2: bool>(
+    t: &PsfTables,
+    g: &FrameGeometry,
+    elev: &[f32],
+    depth: &[f32],
+    amp: &[[f32; 2]],
+    surface: f64,
+    warps: &WarpSet,
+    out: &mut [[f32; 2]],
+) {
     let ax = &t.axial;
     let k = ax.half;
     let taps = 2 * k;
@@ -270,33 +286,27 @@ pub(crate) struct LogCompression {
     pub tgc: f64,
 }
 
-/// Round-trip attenuation, added clutter and noise, TGC along one column,
-/// and the log compression of its envelope into `gray`; `scratch` (at
-/// least `gray.len()` values) holds the column's loss exponents between
-/// the serial walk down the segments and the per-pixel pass.
+/// The round-trip loss exponent `−2 f A` (Np of amplitude) of each row of
+/// one column into `loss_np` (one value per image row), for
+/// [`compress_column`].
 ///
 /// The received echo at image depth `z` is `(iq + clutter) · 10^{−A/20} + noise`,
-/// `A = 2 f ∫₀^z α(z') dz'` dB, displayed with the TGC gain `2 f α_TGC z` dB;
-/// `α` is the
+/// `A = 2 f ∫₀^z α(z') dz'` dB; `α` is the
 /// attenuation slope of the tissue met along the beam (piecewise constant
 /// between the anatomy's breakpoints, carried by the deformation). Bone
 /// attenuates ≈ 30 times more than soft tissue, which makes its shadow;
 /// blood ≈ 4 times less, which makes the enhancement below the vessels.
-#[allow(clippy::too_many_arguments)]
+/// Without anatomy (a phantom) `α` is the TGC's.
 #[inline(always)]
-pub(crate) fn compress_column(
+pub(crate) fn column_loss(
     lc: &LogCompression,
     g: &FrameGeometry,
     anatomy: Option<&Anatomy>,
     u: f64,
     surface: f64,
     warps: &WarpSet,
-    iq: &[[f32; 2]],
-    add: &Additive,
-    scratch: &mut [f64],
-    gray: &mut [u8],
+    loss_np: &mut [f64],
 ) {
-    let loss_np = &mut scratch[..gray.len()];
     // Breakpoints mapped to image depth (m, cm) and the slope after each.
     let mut z = [0.0f64; MAX_BREAKPOINTS + 1];
     let mut alpha = [0.0f64; MAX_BREAKPOINTS + 1];
@@ -328,8 +338,7 @@ pub(crate) fn compress_column(
         seg += 1;
     }
     let db_to_np = std::f64::consts::LN_10 / 20.0;
-    // Pass 1 (serial: the segments): the round-trip loss exponent `−2 f A`
-    // (Np) of each row.
+    // Serial: the segments.
     for (i, x) in loss_np.iter_mut().enumerate() {
         let zi = (i as f64 + 0.5) * g.dz;
         while seg < n && z[seg] <= zi {
@@ -341,9 +350,25 @@ pub(crate) fn compress_column(
         let att = acc + slope * (zi - z_at) * 100.0;
         *x = -2.0 * lc.f_mhz * att * db_to_np;
     }
-    // Pass 2 (independent pixels, which the compiler may take several at a
-    // time): loss, clutter and noise, TGC, log compression.
-    for (i, ((px, out), &x)) in iq.iter().zip(gray.iter_mut()).zip(&*loss_np).enumerate() {
+}
+
+/// The loss `loss_np` (Np of amplitude per row, from [`column_loss`] and
+/// the frame's corrections), added clutter and noise, TGC along one column,
+/// and the log compression of its envelope into `gray`: the received echo
+/// `(iq + clutter) e^{x} + noise`, displayed with the TGC gain
+/// `2 f α_TGC z` dB.
+#[inline(always)]
+pub(crate) fn compress_column(
+    lc: &LogCompression,
+    g: &FrameGeometry,
+    iq: &[[f32; 2]],
+    add: &Additive,
+    loss_np: &[f64],
+    gray: &mut [u8],
+) {
+    // Independent pixels, which the compiler may take several at a time:
+    // loss, clutter and noise, TGC, log compression.
+    for (i, ((px, out), &x)) in iq.iter().zip(gray.iter_mut()).zip(loss_np).enumerate() {
         let zi = (i as f64 + 0.5) * g.dz;
         let loss = x.exp() as f32;
         let gain = 2.0 * lc.f_mhz * lc.tgc * zi * 100.0;
