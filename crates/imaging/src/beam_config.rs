@@ -5,8 +5,10 @@
 //! 2021, "SIMUS: an open-source simulator for medical ultrasound imaging",
 //! Comput. Methods Programs Biomed. 218): 128 elements at 0.30 mm pitch,
 //! 0.27 mm wide, 77 % fractional bandwidth at −6 dB, 5 mm elevation height
-//! with an 18 mm elevation lens. A two-cycle transmit at the centre
-//! frequency, a 32-element transmit aperture focused at 20 mm, dynamic
+//! with an 18 mm elevation lens. A 2.5-cycle transmit at the centre
+//! frequency under a Hann envelope (axial FWHM 0.21 mm from 10 to 40 mm,
+//! `echothigh psf`; PyMUST with this preset: 0.19–0.24 mm with
+//! attenuation), a 32-element transmit aperture focused at 20 mm, dynamic
 //! receive focusing at F# 1.7 with a 50 % Tukey apodization (Szabo 2014,
 //! "Diagnostic Ultrasound Imaging: Inside Out", 2nd ed., ch. 7: the receive
 //! aperture of scanners grows with depth at a fixed F# of 1–3, apodized;
@@ -36,7 +38,8 @@ use serde::{Deserialize, Serialize};
 pub struct BeamConfig {
     /// One-way fractional bandwidth of the elements at −6 dB. Default 0.77.
     pub bandwidth: f64,
-    /// Cycles of the transmitted burst at the centre frequency. Default 2.
+    /// Cycles of the transmitted burst at the centre frequency, under a
+    /// Hann envelope (`crate::pulse`). Default 2.5.
     pub pulse_cycles: f64,
     /// Element pitch (m). Default 0.30e-3.
     pub pitch: f64,
@@ -65,7 +68,7 @@ impl Default for BeamConfig {
     fn default() -> Self {
         BeamConfig {
             bandwidth: 0.77,
-            pulse_cycles: 2.0,
+            pulse_cycles: 2.5,
             pitch: 0.30e-3,
             element_width: 0.27e-3,
             elements: 128,

@@ -9,9 +9,11 @@
 //!   frequency 7.5 MHz, speed of sound 1540 m/s (the scanners' convention).
 //! - **Beam**: the array, its pulse and focusing are `[imaging.beam]`
 //!   ([`BeamConfig`], with its sources); the resolution follows from them
-//!   (axial FWHM ≈ 0.2 mm, lateral ≈ 0.4 mm at the 20 mm focus). The
-//!   default grid, 512 × 768 over 40 × 60 mm (78 µm pixels), carries
-//!   ≥ 2.5 pixels per axial FWHM.
+//!   (axial FWHM 0.21 mm, lateral 0.44 mm at the 20 mm focus). The
+//!   default grid, 512 × 864 over 40 × 60 mm (69 µm rows), carries
+//!   ≥ 2.5 pixels per axial FWHM (3.05 measured by `echothigh psf`; the
+//!   measure on a sampled envelope moves by ~5 % with the grid, and 768
+//!   or 800 rows gave 2.4–2.6).
 //! - **Attenuation compensated by the TGC**: soft tissue 0.5–0.7 dB/(cm·MHz)
 //!   (Duck 1990, "Physical Properties of Tissue", ch. 4; Goss, Johnston &
 //!   Dunn 1978, JASA 64). Default 0.65 dB/(cm·MHz).
@@ -41,7 +43,7 @@ pub const FWHM_PER_SIGMA: f64 = 2.354_820_045_030_949;
 pub struct ImagingConfig {
     /// Image columns (lateral pixels, along the probe's width). Default 512.
     pub columns: usize,
-    /// Image rows (axial pixels, depth). Default 768.
+    /// Image rows (axial pixels, depth). Default 864.
     pub rows: usize,
     /// Columns of the live viewer's image ([`ImagingConfig::live`]): the
     /// live path renders on one core and streams every frame to the browser
@@ -50,7 +52,7 @@ pub struct ImagingConfig {
     /// ≥ 2.5 pixels).
     pub live_columns: usize,
     /// Rows of the live viewer's image. Default 384 (156 µm over 60 mm: the
-    /// axial FWHM, 0.23 mm, spans 1.5 pixels; the envelope is still sampled
+    /// axial FWHM, 0.21 mm, spans 1.35 pixels; the envelope is still sampled
     /// above its Nyquist rate, bandwidth ~1/FWHM).
     pub live_rows: usize,
     /// Lateral field of view, centred on the probe (m). Default 0.040.
@@ -121,7 +123,7 @@ impl Default for ImagingConfig {
     fn default() -> Self {
         ImagingConfig {
             columns: 512,
-            rows: 768,
+            rows: 864,
             live_columns: 256,
             live_rows: 384,
             width: 0.040,

@@ -427,6 +427,12 @@ impl Renderer {
         self.anatomy.as_ref()
     }
 
+    /// Taps of the axial kernel each scatterer is splatted with (`2K`,
+    /// [`crate::pulse::AxialTables`]).
+    pub fn axial_taps(&self) -> usize {
+        2 * self.tables.axial.half
+    }
+
     /// Number of scatterers in the field.
     pub fn scatterer_count(&self) -> usize {
         self.field.len()

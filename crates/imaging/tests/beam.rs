@@ -14,7 +14,7 @@ fn at(r: &PsfReport, depth: f64) -> PsfAtDepth {
 fn point_phantom_resolution_focal_gain_and_side_lobes() {
     let r = measure_psf(&ImagingConfig::default()).unwrap();
     // Issue 21's targets, from PyMUST/SIMUS with the L11-5v preset: axial
-    // 0.18–0.25 mm at every depth (2-cycle broadband pulse), lateral
+    // 0.18–0.25 mm at every depth (2.5-cycle Hann burst, 77 % bandwidth), lateral
     // 0.35–0.45 mm at the 20 mm focus and ≥ 1.3× that off focus.
     for p in &r.depths {
         assert!(

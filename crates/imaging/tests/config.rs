@@ -14,7 +14,7 @@ fn defaults_validate_and_round_trip() {
         toml::from_str("columns = 128\n[anatomy]\nvein_diameter = 0.009\n").unwrap();
     assert_eq!(partial.columns, 128);
     assert_eq!(partial.anatomy.vein_diameter, 0.009);
-    assert_eq!(partial.rows, 768);
+    assert_eq!(partial.rows, 864);
 }
 
 #[test]

@@ -36,25 +36,28 @@ use std::sync::Arc;
 
 /// The probe's pose on `leg` from its face centre `position` (m, model
 /// frame) and `orientation` (w, x, y, z; model ← tool, the beam along the
-/// tool's `−y`): `s` and `θ` of the face centre (measured from the leg's
-/// axis, so a face pressed into the skin keeps its place), and the tilt of
-/// the beam out of the transverse plane (+ distally), clamped to ±60°
+/// tool's `−y`): `s` and `θ` of the point where the beam's axis meets the
+/// rest skin ([`contact_point`]: a face pressed into the skin along its
+/// beam keeps its place, on the leg's taper too), and the tilt of the beam
+/// out of the transverse plane (+ distally), clamped to ±60°
 /// ([`MAX_ANGLE`]); the spin about the beam is taken as 0 (the page and the
 /// simulated devices hold the image transverse). Errors when the face is
 /// beyond the leg's ends or the input is not finite.
 pub fn leg_pose(leg: &LegSurface, position: [f64; 3], orientation: [f64; 4]) -> Result<ProbePose> {
-    let p = leg.to_leg(&Vec3::from(position));
-    let s = frame::s_of(&p);
-    let theta = frame::theta_of(&p);
+    let face = leg.to_leg(&Vec3::from(position));
     let anatomy = leg.anatomy();
-    anatomy.check_s("probe position s (m)", s)?;
+    anatomy.check_s("probe position s (m)", frame::s_of(&face))?;
     anyhow::ensure!(
-        theta.is_finite() && orientation.iter().all(|v| v.is_finite()),
+        frame::theta_of(&face).is_finite() && orientation.iter().all(|v| v.is_finite()),
         "the probe's position or orientation is not finite"
     );
     let [w, x, y, z] = orientation;
     let q = UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z));
     let beam = -(q * Vec3::y());
+    let p = contact_point(anatomy, &face, &beam);
+    let s = frame::s_of(&p);
+    let theta = frame::theta_of(&p);
+    anatomy.check_s("probe contact s (m)", s)?;
     let plane = anatomy.image_plane(&ProbePose::transverse(s, theta))?;
     let mut distal = plane.lateral.cross(&plane.depth);
     if distal.z > 0.0 {
@@ -70,6 +73,37 @@ pub fn leg_pose(leg: &LegSurface, position: [f64; 3], orientation: [f64; 4]) -> 
         tilt,
         spin: 0.0,
     })
+}
+
+/// Where the beam's axis through a pressed `face` centre (m, leg frame)
+/// meets the rest skin: the face moved back along `beam` (unit, into the
+/// tissue) by the `t ∈ [0, 0.1 m]` at which its distance from the leg's
+/// axis reaches the skin's radius there (bisection to 1 nm). A face on or
+/// off the skin is its own contact point. Pressing along the beam moves the
+/// face's `s` by the depth times the taper's slope (0.8 mm for 8 mm on the
+/// default thigh), which rebuilt the live section at every press.
+fn contact_point(anatomy: &Anatomy, face: &Vec3, beam: &Vec3) -> Vec3 {
+    let outside = |p: &Vec3| {
+        let s = frame::s_of(p);
+        anatomy.check_s("s", s).is_err()
+            || p.xy().norm() >= anatomy.leg().skin_radius(s, frame::theta_of(p))
+    };
+    if outside(face) {
+        return *face;
+    }
+    let (mut lo, mut hi) = (0.0, 0.1);
+    if !outside(&(face - hi * beam)) {
+        return *face;
+    }
+    while hi - lo > 1e-9 {
+        let mid = 0.5 * (lo + hi);
+        if outside(&(face - mid * beam)) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    face - hi * beam
 }
 
 /// Material lateral coordinate (m) of the image centre at `pose` (see the

@@ -1,5 +1,5 @@
 //! `echothigh bench image`: frame rate of the B-mode renderer at the
-//! default size (512 × 768, `echothigh image`) and at the live viewer's
+//! default size (512 × 864, `echothigh image`) and at the live viewer's
 //! size (256 × 384, `[imaging] live_columns/live_rows`), the latter also
 //! with the section of the 3D leg at `fv-proximal`, on one core (the
 //! renderer is serial and allocation-free: the viewer renders on its own
@@ -9,7 +9,11 @@
 
 use super::clock::thread_cpu_us;
 use anyhow::{Context, Result};
+use echothigh_anatomy::{ProbePose, Site};
 use echothigh_imaging::{FrameInput, ImagingConfig, Renderer, SectionDeformation, VeinState};
+use echothigh_model::LegSurface;
+use echothigh_runtime::scenario::Scenario;
+use echothigh_runtime::section_follow::SectionImager;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -29,6 +33,10 @@ pub struct Args {
     /// 384 with B-mode, and PW spectral lines (10 × --frames lines).
     #[arg(long)]
     pub doppler: bool,
+    /// Time only the live viewer's frames (the default scenario's leg
+    /// through the section imager, at the groin and mid-thigh).
+    #[arg(long)]
+    pub live: bool,
 }
 
 /// Percentiles of frame times (s).
@@ -128,6 +136,50 @@ fn bench_size(
         }),
         "vessels": r.anatomy().map_or(0, |a| a.vessels().len()),
         "scatterers": r.scatterer_count(),
+        "axial_taps": r.axial_taps(),
+        "one_core_thread_cpu": timing(cpu, 1),
+        "one_core_wall": timing(wall, 1),
+    }))
+}
+
+/// Times the live viewer's frame (issue 19): the default scenario's leg,
+/// its live image settings (256 × 384, the depth a sonographer sets at the
+/// level), the section drawn in material coordinates by the imaging
+/// thread's [`SectionImager`] at `site`, under the same press.
+fn bench_live(site: Option<Site>, frames: usize) -> Result<serde_json::Value> {
+    let sc = Scenario::builtin()?;
+    let leg = LegSurface::new(&sc.thigh, "thigh")?.context("the default scenario has no leg")?;
+    let cfg = sc.live_imaging_config();
+    // `None`: where a trainee first puts the probe on the page, anterior
+    // mid-thigh (θ = 0.1 rad, 0.19 m below the ligament), off the vein, so
+    // that the image reaches the femur (80 mm).
+    let pose = site.map_or(ProbePose::transverse(0.19, 0.1), |s| {
+        leg.anatomy().site_pose(s)
+    });
+    let mut im = SectionImager::new(leg, &cfg, VeinState::Healthy, pose)?;
+    let r = im.renderer();
+    let bone = r.anatomy().context("anatomy")?.femur_top();
+    let (depth_m, width_m) = (r.config().depth, r.config().probe_width);
+    let presses: Vec<SectionDeformation> = (0..60)
+        .map(|k| {
+            let phase = k as f64 / 60.0 * std::f64::consts::TAU;
+            let depth = 8e-3 - 6e-3 * phase.cos();
+            SectionDeformation::flat_press(depth, width_m, 1.5e-3, bone)
+        })
+        .collect::<Result<_, _>>()?;
+    let (cpu, wall) = run_frames(r, &presses, frames)?;
+    let (columns, rows) = r.frame_size();
+    Ok(serde_json::json!({
+        "columns": columns,
+        "rows": rows,
+        "depth_m": depth_m,
+        "anatomy": format!(
+            "live: default scenario's leg, section imager at {}",
+            site.map_or("anterior mid-thigh", Site::name)
+        ),
+        "vessels": r.anatomy().map_or(0, |a| a.vessels().len()),
+        "scatterers": r.scatterer_count(),
+        "axial_taps": r.axial_taps(),
         "one_core_thread_cpu": timing(cpu, 1),
         "one_core_wall": timing(wall, 1),
     }))
@@ -164,10 +216,15 @@ pub fn run(args: Args) -> Result<()> {
         (256, 384, None),
         (256, 384, Some("fv-proximal")),
     ];
-    let reports = sizes
+    let sizes = if args.live { &sizes[..0] } else { &sizes[..] };
+    let mut reports = sizes
         .iter()
         .map(|&(c, r, site)| bench_size(c, r, args.frames, site))
         .collect::<Result<Vec<_>>>()?;
+    // The live viewer's frame at the groin and mid-thigh.
+    for site in [Some(Site::Cfv), Some(Site::FvMid), None] {
+        reports.push(bench_live(site, args.frames)?);
+    }
     let report = serde_json::json!({
         "benchmark": "image",
         "profile": if cfg!(debug_assertions) { "debug" } else { "release" },
