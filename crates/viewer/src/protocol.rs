@@ -102,6 +102,11 @@ pub struct ViewState {
     /// Number of this state on its connection (1, 2, …): the page
     /// acknowledges it ([`ViewerCommand::Ack`]) once drawn.
     pub seq: u64,
+    /// When the server sent this state: Unix time (ms). On one machine the
+    /// page's clock is the server's, so a command's lag splits into the
+    /// server's part (sent − command) and the delivery's (arrival − sent).
+    #[serde(default)]
+    pub sent_ms: f64,
     /// A thread of the simulation stopped, in plain words (`None`: all run).
     pub fault: Option<String>,
     /// The real haptic device driving the probe (issue 15): its clutch, its
@@ -130,6 +135,7 @@ impl ViewState {
             exam,
             observer: false,
             seq: 0,
+            sent_ms: 0.0,
             fault: snap.fault.clone(),
             haptic_device: snap.haptic_device.as_ref().map(|d| d.sanitized()),
             doppler: None,
@@ -184,9 +190,15 @@ pub enum ViewerCommand {
     },
 }
 
-/// States a connection may have unacknowledged: one being drawn by the page,
-/// one on its way. More would queue stale frames (the lag of issue 19).
-pub const CREDIT: u64 = 2;
+/// States a connection may have unacknowledged. With 2 (one taken by the
+/// page, one on its way) a page held ~60 ms by a long task stalled the
+/// stream: the state showing a command's effect waited for an
+/// acknowledgement, and the page took 16 of the 40 states/s. With 4 the
+/// states sent during such a task (25 ms apart) wait in the socket and are
+/// taken in one burst; the newest is at most one push old. The queue is at
+/// most 4 states (~2.5 KB), never a backlog (the issue 19 backlog was
+/// seconds of unacknowledged frames).
+pub const CREDIT: u64 = 4;
 
 /// A decoded, validated page message.
 #[derive(Debug, Clone, PartialEq)]

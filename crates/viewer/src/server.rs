@@ -609,6 +609,9 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
     conn.sent += 1;
     let mut state = app.view_state(&conn.snap, &mut conn.exam_rev);
     state.seq = conn.sent;
+    state.sent_ms = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64() * 1e3);
     state.observer = !app.drives(conn.id, false);
     state.doppler = app.control.doppler_status();
     let spectral = state

@@ -34,7 +34,7 @@ const live = {
   arrivals: { state: [], image: [], render: [] },
   // Where the page's time goes (ms, the last 300 of each): an image from
   // its arrival to its drawing, and one 3D render.
-  costs: { image: [], render: [] }, probe: { theta: 0, z: 0, depth: 0.008, tilt: 0, placed: false },
+  costs: { image: [], render: [], delivery: [] }, probe: { theta: 0, z: 0, depth: 0.008, tilt: 0, placed: false },
 };
 window.echothigh = live;
 function stamp(list, value = performance.now()) {
@@ -146,9 +146,12 @@ function onFrame(buf) {
     // acknowledged when that one is drawn.
     decoding += 1;
     if (decoding === 1) send({ type: 'image_ack' }); else ackOwed = true;
-    imageChain = imageChain.then(() => Promise.all([decodeGray(jpeg, a, b), codes && decodeGray(codes, a, b)])).then(([px, overlay]) => {
-      gray = px;
-      showImage(a, b, gray, time, overlay);
+    // A B-mode frame is drawn as decoded; with the flow's codes, its
+    // pixels are read back to be coloured.
+    const shown = flow
+      ? () => Promise.all([decodeGray(jpeg, a, b), decodeGray(codes, a, b)]).then(([px, overlay]) => showImage(a, b, px, time, overlay))
+      : () => decodeBitmap(jpeg, a, b).then((bmp) => { showBitmap(bmp, time); bmp.close(); });
+    imageChain = imageChain.then(shown).then(() => {
       stamp(live.costs.image, performance.now() - arrived);
     }).catch((e) => toast(`image: ${e.message}`))
       .finally(() => {
@@ -160,7 +163,6 @@ function onFrame(buf) {
 
 // The surface and the image as the page holds them (the wire sends changes).
 const surface = { pos: null, comp: null };
-let gray = null;
 let imageChain = Promise.resolve();
 let decoding = 0; // images received and not yet drawn
 let ackOwed = false; // an image_ack held back while one decodes
@@ -194,6 +196,13 @@ function decorateEcho(ctx, w, h) {
 }
 function showImage(w, h, px, time, overlay = null) {
   echo.draw(w, h, px, overlay, doppler.palette(), decorateEcho);
+  imageShown(time);
+}
+function showBitmap(bmp, time) {
+  echo.drawBitmap(bmp, decorateEcho);
+  imageShown(time);
+}
+function imageShown(time) {
   live.imageFrames += 1;
   live.imageTime = time;
   stamp(live.arrivals.image);
@@ -201,10 +210,18 @@ function showImage(w, h, px, time, overlay = null) {
 }
 const grayCanvas = new OffscreenCanvas(1, 1);
 const grayCtx = grayCanvas.getContext('2d', { willReadFrequently: true });
+/** An 8-bit gray JPEG or PNG decoded as it is (no colour management), checked against its header's size. */
+async function decodeBitmap(blob, w, h) {
+  const bmp = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
+  if (bmp.width !== w || bmp.height !== h) {
+    bmp.close();
+    throw new Error(`image of ${bmp.width}×${bmp.height}, header ${w}×${h}`);
+  }
+  return bmp;
+}
 /** The gray levels of an 8-bit gray JPEG or PNG (no colour management). */
 async function decodeGray(blob, w, h) {
-  const bmp = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
-  if (bmp.width !== w || bmp.height !== h) throw new Error(`image of ${bmp.width}×${bmp.height}, header ${w}×${h}`);
+  const bmp = await decodeBitmap(blob, w, h);
   grayCanvas.width = w; grayCanvas.height = h;
   grayCtx.drawImage(bmp, 0, 0);
   bmp.close();
@@ -223,11 +240,31 @@ function onState(s) {
   // Flow control: the server sends the next state once this one is taken.
   send({ type: 'ack', seq: s.seq });
   stamp(live.arrivals.state);
+  // How long the state took from the server to this handler (ms; one
+  // machine's clock, or two in step).
+  if (s.sent_ms > 0) stamp(live.costs.delivery, performance.timeOrigin + performance.now() - s.sent_ms);
   notify('state', s);
   const rendered = norm(s.rendered_force), physics = norm(s.physics_force);
   plot.push(s.time, rendered, physics);
   gauge.update(rendered, physics, s.max_force, s.section && s.section.target_band);
   if (scene) scene.updateState(s);
+  // The panels (text the trainee reads) follow at most every PANELS_MS,
+  // with the newest state: at 40 states/s their DOM updates (style,
+  // layout, paint) held the page's thread from the next state (issue 19).
+  // A change the trainee acts on (the exam, the vein, who drives, a fault,
+  // the mode) shows at once.
+  const now = performance.now();
+  const key = `${s.vein}|${s.observer}|${s.fault}|${s.mode}|${s.exam_playing}|${s.doppler && s.doppler.mode}|${!!s.haptic_device}`;
+  const changed = key !== panels.key || s.exam !== panels.exam;
+  panels.key = key; panels.exam = s.exam;
+  if (changed || now - panels.at >= PANELS_MS) showPanels(s);
+  else if (!panels.timer) panels.timer = setTimeout(() => showPanels(live.state), PANELS_MS - (now - panels.at));
+}
+const PANELS_MS = 200;
+const panels = { at: -Infinity, timer: null, key: '', exam: null };
+function showPanels(s) {
+  panels.at = performance.now();
+  if (panels.timer) { clearTimeout(panels.timer); panels.timer = null; }
   showStatus(s, renderedFps);
   syncControls(s);
   showExam(s.exam, s.level_s, send);
@@ -409,15 +446,20 @@ function adaptScale(now) {
   if (adapt.smooth > SLOW_MS && scene.scale > 0.5) { scene.setScale(scene.scale * 0.8); adapt.changed = now; }
   else if (adapt.smooth < FAST_MS && scene.scale < 1) { scene.setScale(scene.scale / 0.8); adapt.changed = now; }
 }
+// On a software rasterizer a 3D frame holds the page's thread until the
+// rasterizer has drawn it (the compositor reads it back): at most one every
+// SOFTWARE_MIN_MS there, so that the states are taken as they come.
+const SOFTWARE_MIN_MS = 125;
 function frame(now) {
   flushProbe();
   adaptScale(now);
-  if (scene && (scene.dirty || now - adapt.drawn > REDRAW_MS)) {
+  const due = !scene || !scene.software || now - adapt.drawn >= SOFTWARE_MIN_MS;
+  if (scene && due && (scene.dirty || now - adapt.drawn > REDRAW_MS)) {
     const t = performance.now();
     scene.render(); adapt.drawn = now; adapt.rendered = true; stamp(live.arrivals.render);
     stamp(live.costs.render, performance.now() - t);
   }
-  plot.draw();
+  if (plot.dirty) plot.draw();
   fpsWindow.frames += 1;
   if (now - fpsWindow.t >= 1000) {
     const dt = (now - fpsWindow.t) / 1000;

@@ -44,6 +44,26 @@ export class EchoView {
     if (decorate) decorate(this.ctx, width, height);
     this.frames += 1;
   }
+
+  /**
+   * A decoded gray B-mode frame (an ImageBitmap decoded without colour
+   * conversion) drawn as it is: one `drawImage`, no per-pixel work on the
+   * page's thread (issue 19: under a throttled CPU the pixel loops of
+   * `draw` held each image ~0.2 s between arrival and screen).
+   */
+  drawBitmap(bitmap, decorate = null) {
+    const { width, height } = bitmap;
+    if (width === 0 || height === 0) return;
+    if (this.canvas.width !== width || this.canvas.height !== height) {
+      this.canvas.width = width;
+      this.canvas.height = height;
+      this.image = null;
+    }
+    this.ctx.drawImage(bitmap, 0, 0);
+    this.coloured = 0;
+    if (decorate) decorate(this.ctx, width, height);
+    this.frames += 1;
+  }
 }
 
 /**
@@ -194,6 +214,7 @@ export class ForcePlot {
     this.ctx = canvas.getContext('2d');
     this.span = span;
     this.samples = []; // [t (s), rendered (N), physics (N)]
+    this.dirty = true; // samples came since the last draw
   }
 
   push(t, rendered, physics) {
@@ -201,10 +222,12 @@ export class ForcePlot {
     if (last && t < last[0]) this.samples.length = 0; // time went back: a reset
     if (last && t === last[0]) return;
     this.samples.push([t, rendered, physics]);
+    this.dirty = true;
     while (this.samples.length && this.samples[0][0] < t - this.span) this.samples.shift();
   }
 
   draw() {
+    this.dirty = false;
     const { ctx, canvas } = this;
     const w = canvas.width, h = canvas.height, pad = { l: 34, r: 6, t: 6, b: 18 };
     ctx.fillStyle = '#0c0f14';

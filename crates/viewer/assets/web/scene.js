@@ -22,16 +22,41 @@ function compressionColour(c, out) {
   return out;
 }
 
+/** Whether WebGL runs on a software rasterizer (SwiftShader, llvmpipe): no GPU. */
+function softwareRenderer() {
+  try {
+    const gl = document.createElement('canvas').getContext('webgl2');
+    if (!gl) return false;
+    const info = gl.getExtension('WEBGL_debug_renderer_info');
+    const name = String(info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER));
+    const lose = gl.getExtension('WEBGL_lose_context');
+    if (lose) lose.loseContext();
+    return /swiftshader|llvmpipe|software/i.test(name);
+  } catch (_) {
+    return false;
+  }
+}
+
 export class ThighScene {
   constructor(canvas) {
     this.canvas = canvas;
-    // preserveDrawingBuffer lets tests and screenshots read the pixels back.
-    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
+    // On a software renderer (no GPU: SwiftShader or llvmpipe) the page's
+    // thread hands every frame to the compositor by a copy, and a
+    // multisampled one is resolved first: without antialiasing, and with
+    // the drawing buffer swapped rather than preserved, that copy is cheaper
+    // (issue 19: it was half the page's thread under a throttled CPU). Tests
+    // read the pixels right after a render, in the same task.
+    const software = softwareRenderer();
+    this.software = software;
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: !software, preserveDrawingBuffer: false });
     this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
     // Resolution scale (1: the screen's pixels): lowered by the page when
     // frames come slowly (software WebGL on a busy laptop), so that drawing
     // the leg does not starve the state handling and the simulation.
     this.scale = 1;
+    // A software rasterizer draws every pixel on the CPU the simulation
+    // shares: start at half the resolution (a quarter of the pixels).
+    if (software) this.setScale(0.5);
     // Something changed since the last render (the page draws only then).
     this.dirty = true;
     this.scene = new THREE.Scene();

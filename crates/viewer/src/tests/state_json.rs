@@ -8,7 +8,7 @@ use super::protocol::sample_state;
 /// `msg.type` in `app.js`'s `onJson`, the rest as `s.<key>` in `onState`,
 /// `syncControls` (app.js), `showStatus` (panels.js) and `updateState`
 /// (scene.js).
-const PAGE_STATE_KEYS: [&str; 29] = [
+const PAGE_STATE_KEYS: [&str; 30] = [
     "v",
     "type",
     "time",
@@ -36,6 +36,7 @@ const PAGE_STATE_KEYS: [&str; 29] = [
     "exam",
     "observer",
     "seq",
+    "sent_ms",
     "fault",
     "haptic_device",
 ];
@@ -94,7 +95,8 @@ fn state_json_is_unchanged_byte_for_byte() {
     // issue 14, with its Doppler sites and the score's Doppler part;
     // `haptic_device`, the real device driving the probe, added last for
     // issue 15; `haptic_priority`, the haptic thread's scheduling, for
-    // issue 19; `imaging_rate`, the image's achieved frames/s, for issue 19 —
+    // issue 19; `imaging_rate`, the image's achieved frames/s, for issue 19;
+    // `sent_ms`, when the server sent it, for issue 19's lag split —
     // this golden was updated deliberately for each).
     let expected = concat!(
         r#"{"v":2,"type":"state","time":1.25,"probe_position":[0.0,0.07,0.01],"#,
@@ -114,7 +116,7 @@ fn state_json_is_unchanged_byte_for_byte() {
         r#""duration":61.5,"peak_force":14.0,"mean_force":6.5,"sites":[],"missed":[],"#,
         r#""doppler":{"correct":0,"total":0,"sites":[]}},"#,
         r#""truth":[{"vein":"pv","s_start":0.33,"s_end":0.37,"kind":"acute_occlusive"}],"#,
-        r#""coverage":[]},"error":null},"observer":false,"seq":0,"fault":null,"haptic_device":null}"#
+        r#""coverage":[]},"error":null},"observer":false,"seq":0,"sent_ms":0.0,"fault":null,"haptic_device":null}"#
     );
     let text = serde_json::to_string(&Envelope::new(ServerMessage::State(sample_state()))).unwrap();
     assert_eq!(text, expected);
