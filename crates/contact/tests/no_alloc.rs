@@ -37,9 +37,10 @@ fn contact_step_and_queries_do_not_allocate() {
 }
 
 /// Issue 18's paths: the grid kept in place (unchanged and rebinned; the
-/// full rebuild runs in the warm-up and on the reference path), the stiffness product reused from a solve that ran no
-/// iteration and computed after one that did, the distance skipped in
-/// contact; and the previous implementation ([`QueryPath::Reference`]).
+/// full rebuild runs in the warm-up and on the reference path), the
+/// stiffness product reused from a solve that ran no iteration and computed
+/// after one that did, the distance skipped in contact; and the previous
+/// implementation ([`QueryPath::Reference`]).
 #[test]
 fn fast_and_reference_query_paths_do_not_allocate() {
     let config = ModelConfig::default();
