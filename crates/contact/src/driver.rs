@@ -22,6 +22,14 @@
 //! one (the first to be touched), each with its penalty stiffness `λ_c a`.
 //! It is recomputed every step (one solve, as in contact). If no surface
 //! lies under the face (the probe beside the thigh), the last value is kept.
+//!
+//! **Query path** (issue 18, [`QueryPath`]). By default the stiffness takes
+//! `T w` from its solve's matrix, the signed distance is queried only when
+//! it is sent (out of contact, or in contact with no usable `k`), and the
+//! broad-phase grid is kept up to date in place; [`QueryPath::Reference`]
+//! keeps the previous implementation for same-run comparisons and tests.
+//! Both send the same samples but for `k` (and `D = −|F·n|/k`), which agree
+//! within the solver's bound (see [`crate::stiffness`]).
 
 use crate::error::ConfigError;
 use crate::params::ContactParams;
@@ -71,6 +79,19 @@ pub struct QueryStats {
     pub timings: StepTimings,
 }
 
+/// Which implementation [`ProbeContact`]'s queries run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum QueryPath {
+    /// `T w` through the stiffness solve's matrix, the signed distance only
+    /// when it is sent, the broad-phase grid kept up to date in place.
+    #[default]
+    Fast,
+    /// The implementation before issue 18: matrix-free `T w`, the signed
+    /// distance at every sample, the grid rebuilt from scratch each time.
+    Reference,
+}
+
 /// The outcome of [`ProbeContact::step`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactStep {
@@ -92,6 +113,7 @@ pub struct ProbeContact {
     set: ContactSet,
     last_pose: Option<Isometry3<f64>>,
     first_touch_k: f64,
+    path: QueryPath,
 }
 
 impl ProbeContact {
@@ -117,7 +139,34 @@ impl ProbeContact {
             set: ContactSet::with_capacity(n),
             last_pose: None,
             first_touch_k: 0.0,
+            path: QueryPath::Fast,
         })
+    }
+
+    /// Chooses the implementation of the queries ([`QueryPath::Fast`]
+    /// unless set). No allocation.
+    pub fn set_query_path(&mut self, path: QueryPath) {
+        self.path = path;
+        let reference = path == QueryPath::Reference;
+        self.contact.set_incremental_grid(!reference);
+        self.stiffness.set_matrix_free(reference);
+    }
+
+    /// The implementation of the queries.
+    pub fn query_path(&self) -> QueryPath {
+        self.path
+    }
+
+    /// The springs of the last stiffness query (actual or first-touch
+    /// contact; empty if there was none).
+    pub fn stiffness_set(&self) -> &ContactSet {
+        &self.set
+    }
+
+    /// The Schur-complement solver's scratch (its last `w` warm-starts the
+    /// next query).
+    pub fn local_stiffness(&self) -> &LocalStiffness {
+        &self.stiffness
     }
 
     /// The penalty contact (Eq. 2).
@@ -240,19 +289,24 @@ impl ProbeContact {
         let pose = *self.contact.pose();
         let p = Probe::reference_point(&pose);
         let k_dir = Probe::contact_direction(&pose);
-        // Distance first: out of contact it bounds how far below the face
-        // the first-touch surface can be.
+        // Out of contact the distance comes before the stiffness: it bounds
+        // how far below the face the first-touch surface can be.
         let mut timings = StepTimings::default();
         let clock = Instant::now();
         self.contact
             .prepare(model.positions(), model.velocities(), 0.0);
         timings.broad_phase += seconds_since(clock);
         let (x, v) = (model.positions(), model.velocities());
-        let clock = Instant::now();
-        let surface = self.surface.query(self.contact.grid(), x, &p);
-        timings.distance_query += seconds_since(clock);
         let wrench: Wrench = self.contact.wrench(x, v);
         let in_contact = wrench.samples > 0;
+        // In contact the distance sent is −|F·n|/k: the surface query is
+        // needed only if k turns out unusable (below).
+        let mut surface = None;
+        if !in_contact || self.path == QueryPath::Reference {
+            let clock = Instant::now();
+            surface = self.surface.query(self.contact.grid(), x, &p);
+            timings.distance_query += seconds_since(clock);
+        }
         let mut query = QueryStats {
             contact_samples: wrench.samples,
             ..QueryStats::default()
@@ -311,7 +365,15 @@ impl ProbeContact {
             }
         }
         let normal_force = -wrench.force.dot(&k_dir); // F·n, n = −k̂, ≥ 0
-        let (distance, gradient) = match (in_contact && k > 0.0 && k.is_finite(), surface) {
+        let usable_k = in_contact && k > 0.0 && k.is_finite();
+        if in_contact && !usable_k && self.path == QueryPath::Fast {
+            let clock = Instant::now();
+            surface = self
+                .surface
+                .query(self.contact.grid(), model.positions(), &p);
+            timings.distance_query += seconds_since(clock);
+        }
+        let (distance, gradient) = match (usable_k, surface) {
             (true, _) => (-normal_force / k, -k_dir),
             (false, Some(s)) => {
                 query.geometric_distance = true;

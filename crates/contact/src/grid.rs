@@ -14,15 +14,40 @@
 //! swelled, or a node flew away), the cell size grows until it fits. Queries
 //! are exact: candidates from the overlapped cells are tested against the
 //! query shape, so the result is exactly what a brute-force scan returns.
+//!
+//! **Kept up to date** (issue 18). The contact rebins the surface two or
+//! three times per physics step, and between two calls the nodes move by
+//! micrometres to millimetres: most stay in their cell. By default
+//! ([`SurfaceGrid::set_incremental`]) a full rebuild pads the bounding box by
+//! half a target cell on every side, and the next [`SurfaceGrid::rebuild`]
+//! first recomputes each point's cell in the same grid: if every point is
+//! still strictly inside the grid's box, the cells that changed are re-sorted
+//! in place (or nothing is done if none changed); only a point leaving the
+//! box (or a non-finite one) forces a full rebuild. Queries stay exact
+//! either way: they only need every point in the cell its coordinates give.
 
 use crate::probe::OrientedBox;
 use nalgebra::Vector3;
+
+/// What the last [`SurfaceGrid::rebuild`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum GridUpdate {
+    /// Bounding box, cell size and counting sort from scratch.
+    #[default]
+    Rebuilt,
+    /// Same grid; some points changed cell and were re-sorted.
+    Rebinned,
+    /// Same grid; no point changed cell, nothing was re-sorted.
+    Unchanged,
+}
 
 /// Uniform grid over a point set, rebuilt each step without allocation.
 #[derive(Debug, Clone)]
 pub struct SurfaceGrid {
     target_cell: f64,
     cell: f64,
+    /// `1 / cell`, 1/m.
+    inv_cell: f64,
     origin: Vector3<f64>,
     dims: [usize; 3],
     max_cells: usize,
@@ -33,16 +58,28 @@ pub struct SurfaceGrid {
     /// Cell of each point (scratch of the counting sort).
     point_cell: Vec<u32>,
     n_points: usize,
+    /// Points given to the last binning (`x.len()` clipped to capacity).
+    n_given: usize,
+    /// Keep the grid between calls when the points stay inside it.
+    incremental: bool,
+    /// True once a full rebuild has binned every point it was given.
+    reusable: bool,
+    last: GridUpdate,
 }
+
+/// Cell marker of a point left out of the grid (non-finite or too far).
+const SKIPPED: u32 = u32::MAX;
 
 impl SurfaceGrid {
     /// A grid for `n_points` points with cells of edge `cell_size` (m) when
     /// they fit in the capacity (`8 n_points` cells, at least 4096).
     pub fn new(n_points: usize, cell_size: f64) -> Self {
         let max_cells = (8 * n_points).max(4096);
+        let cell = cell_size.max(f64::MIN_POSITIVE);
         Self {
-            target_cell: cell_size.max(f64::MIN_POSITIVE),
-            cell: cell_size.max(f64::MIN_POSITIVE),
+            target_cell: cell,
+            cell,
+            inv_cell: 1.0 / cell,
             origin: Vector3::zeros(),
             dims: [1, 1, 1],
             max_cells,
@@ -50,7 +87,25 @@ impl SurfaceGrid {
             entries: vec![0; n_points],
             point_cell: vec![0; n_points],
             n_points: 0,
+            n_given: 0,
+            incremental: true,
+            reusable: false,
+            last: GridUpdate::Rebuilt,
         }
+    }
+
+    /// Keeps the grid between calls of [`Self::rebuild`] while the points
+    /// stay inside it (`true`, the default), or rebuilds it from scratch
+    /// every time (`false`: the implementation before issue 18, kept for
+    /// same-run comparisons and tests). Queries return the same either way.
+    pub fn set_incremental(&mut self, on: bool) {
+        self.incremental = on;
+        self.reusable = false;
+    }
+
+    /// What the last [`Self::rebuild`] did.
+    pub fn last_update(&self) -> GridUpdate {
+        self.last
     }
 
     /// Current cell edge, m (the target size, or larger if the points'
@@ -74,8 +129,27 @@ impl SurfaceGrid {
     /// healthy model). Skipping keeps the cell count bounded: a point at
     /// 1e308 m made the bounding box's span overflow to infinity and the
     /// cell counts to wrap (an index out of bounds, issue 20).
+    ///
+    /// With [`Self::set_incremental`] on (the default), the grid of the
+    /// previous call is kept if every point is still strictly inside its box
+    /// (see the module docs; [`Self::last_update`] tells which path ran).
     pub fn rebuild(&mut self, x: &[Vector3<f64>]) -> usize {
         let n = x.len().min(self.entries.len());
+        if self.incremental && self.reusable && n == self.n_given {
+            match self.rebin(&x[..n]) {
+                Some(false) => {
+                    self.last = GridUpdate::Unchanged;
+                    return 0;
+                }
+                Some(true) => {
+                    self.sort_by_cell();
+                    self.last = GridUpdate::Rebinned;
+                    return 0;
+                }
+                None => {}
+            }
+        }
+        self.last = GridUpdate::Rebuilt;
         let usable = |p: &Vector3<f64>| p.iter().all(|c| c.abs() <= Self::MAX_COORDINATE);
         let mut lo = Vector3::repeat(f64::INFINITY);
         let mut hi = Vector3::repeat(f64::NEG_INFINITY);
@@ -87,8 +161,14 @@ impl SurfaceGrid {
             lo = Vector3::zeros();
             hi = Vector3::zeros();
         }
-        // span ≤ 2 km and cell ≥ target > 0: the counts below are finite
-        // and computed in f64, so they cannot wrap.
+        if self.incremental {
+            // Room for the points to move before the box must be rebuilt.
+            let pad = Vector3::repeat(0.5 * self.target_cell);
+            lo -= pad;
+            hi += pad;
+        }
+        // span ≤ 2 km (plus the pad) and cell ≥ target > 0: the counts below
+        // are finite and computed in f64, so they cannot wrap.
         let span = hi - lo;
         let mut cell = self.target_cell;
         loop {
@@ -100,20 +180,64 @@ impl SurfaceGrid {
             cell *= 1.5;
         }
         self.cell = cell;
+        self.inv_cell = 1.0 / cell;
         self.origin = lo;
-        let n_cells = self.dims[0] * self.dims[1] * self.dims[2];
-        let counts = &mut self.cell_start[..=n_cells];
-        counts.fill(0);
-        const SKIPPED: u32 = u32::MAX;
+        self.n_given = n;
         let mut binned = 0;
         for (i, p) in x[..n].iter().enumerate() {
-            if usable(p) {
-                let c = self.cell_of(p);
-                self.point_cell[i] = c as u32;
-                self.cell_start[c + 1] += 1;
+            self.point_cell[i] = if usable(p) {
                 binned += 1;
+                self.cell_of(p) as u32
             } else {
-                self.point_cell[i] = SKIPPED;
+                SKIPPED
+            };
+        }
+        self.sort_by_cell();
+        self.reusable = binned == n;
+        n - binned
+    }
+
+    /// Recomputes every point's cell in the current grid into `point_cell`:
+    /// whether some point changed cell, or `None` if a point is not strictly
+    /// inside the grid's box (or not finite), after which `point_cell` is
+    /// partly overwritten and the caller must rebuild from scratch.
+    fn rebin(&mut self, x: &[Vector3<f64>]) -> Option<bool> {
+        let dims = self.dims.map(|d| d as f64);
+        let (o, inv) = (self.origin, self.inv_cell);
+        let mut changed = false;
+        for (p, cell) in x.iter().zip(&mut self.point_cell) {
+            let t = (p - o) * inv;
+            // One negated test: NaN fails every comparison and is outside.
+            let inside = t.x >= 0.0
+                && t.y >= 0.0
+                && t.z >= 0.0
+                && t.x < dims[0]
+                && t.y < dims[1]
+                && t.z < dims[2];
+            if !inside {
+                return None;
+            }
+            // t ≥ 0 and below dims: the truncation is the floor and in range
+            // (the same cell as `cell_of`, which clamps what is already in).
+            let (i, j, k) = (t.x as usize, t.y as usize, t.z as usize);
+            let c = ((k * self.dims[1] + j) * self.dims[0] + i) as u32;
+            changed |= c != *cell;
+            *cell = c;
+        }
+        Some(changed)
+    }
+
+    /// Counting sort of the points `0..n_given` by `point_cell` (skipping
+    /// [`SKIPPED`] ones) into `cell_start` and `entries`.
+    fn sort_by_cell(&mut self) {
+        let n = self.n_given;
+        let n_cells = self.dims[0] * self.dims[1] * self.dims[2];
+        self.cell_start[..=n_cells].fill(0);
+        let mut binned = 0;
+        for &c in &self.point_cell[..n] {
+            if c != SKIPPED {
+                self.cell_start[c as usize + 1] += 1;
+                binned += 1;
             }
         }
         self.n_points = binned;
@@ -134,16 +258,16 @@ impl SurfaceGrid {
             self.cell_start[c] = self.cell_start[c - 1];
         }
         self.cell_start[0] = 0;
-        n - binned
     }
 
+    /// Cell coordinate of `v` (m) along `axis`: `⌊(v − origin)/cell⌋`
+    /// clamped to the grid (NaN and below the origin give 0). The saturating
+    /// `as` conversion truncates, which is the floor for `t ≥ 0`, and is
+    /// monotonic in `v` as the product is: a point between two query bounds
+    /// has its cell between theirs, which is all the queries need.
     fn coord(&self, v: f64, axis: usize) -> usize {
-        let t = ((v - self.origin[axis]) / self.cell).floor();
-        if t.is_nan() || t < 0.0 {
-            0
-        } else {
-            (t as usize).min(self.dims[axis] - 1)
-        }
+        let t = (v - self.origin[axis]) * self.inv_cell;
+        (t as usize).min(self.dims[axis] - 1)
     }
 
     fn cell_of(&self, p: &Vector3<f64>) -> usize {
@@ -302,6 +426,78 @@ mod tests {
             let dmin = x.iter().map(|p| (p - c).norm()).fold(f64::INFINITY, f64::min);
             prop_assert!((d - dmin).abs() < 1e-15 && ((x[i] - c).norm() - dmin).abs() < 1e-15);
         }
+    }
+
+    /// A grid kept up to date while the points move (small steps that
+    /// rebin, a jump out of the box that rebuilds, a rest that changes
+    /// nothing, a non-finite point) answers every query as brute force does,
+    /// and as a grid rebuilt from scratch does.
+    #[test]
+    fn kept_grid_answers_as_brute_force_while_points_move() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(18);
+        let mut x: Vec<Vector3<f64>> = (0..300)
+            .map(|_| {
+                Vector3::new(
+                    rng.gen_range(-0.08..0.08),
+                    rng.gen_range(-0.07..0.07),
+                    rng.gen_range(-0.15..0.15),
+                )
+            })
+            .collect();
+        let mut kept = SurfaceGrid::new(x.len(), 0.012);
+        let mut fresh = SurfaceGrid::new(x.len(), 0.012);
+        fresh.set_incremental(false);
+        let mut seen = [0usize; 3];
+        let (mut got, mut want) = (Vec::new(), Vec::new());
+        for round in 0..60 {
+            let step = match round % 10 {
+                0 | 1 => 0.0, // at rest: unchanged
+                9 => 0.05,    // a jump: some point leaves the box
+                _ => 0.002,   // small motion: some points change cell
+            };
+            for p in &mut x {
+                *p += Vector3::new(
+                    rng.gen_range(-step..=step),
+                    rng.gen_range(-step..=step),
+                    rng.gen_range(-step..=step),
+                );
+            }
+            if round == 45 {
+                x[7] = Vector3::new(f64::NAN, 0.0, 0.0);
+            }
+            assert_eq!(kept.rebuild(&x), fresh.rebuild(&x), "round {round}");
+            seen[kept.last_update() as usize] += 1;
+            assert_eq!(fresh.last_update(), GridUpdate::Rebuilt);
+            for _ in 0..5 {
+                let c = Vector3::new(
+                    rng.gen_range(-0.1..0.1),
+                    rng.gen_range(-0.1..0.1),
+                    rng.gen_range(-0.2..0.2),
+                );
+                let r = rng.gen_range(0.0..0.05);
+                kept.query_sphere(&x, &c, r, &mut got);
+                fresh.query_sphere(&x, &c, r, &mut want);
+                let brute: Vec<usize> = (0..x.len())
+                    .filter(|&i| (x[i] - c).norm_squared() <= r * r)
+                    .collect();
+                assert_eq!(got, brute, "round {round}");
+                assert_eq!(want, brute, "round {round}");
+                let pose = Isometry3::from_parts(
+                    Translation3::from(c),
+                    UnitQuaternion::from_euler_angles(r, -r, 2.0 * r),
+                );
+                let obb = Probe::default().body_box(&pose, 0.004);
+                kept.query_box(&x, &obb, &mut got);
+                let brute: Vec<usize> = (0..x.len()).filter(|&i| obb.contains(&x[i])).collect();
+                assert_eq!(got, brute, "round {round}");
+                assert_eq!(kept.nearest(&x, &c), fresh.nearest(&x, &c), "round {round}");
+            }
+        }
+        assert!(
+            seen.iter().all(|&c| c > 0),
+            "rebuilt, rebinned, unchanged: {seen:?}"
+        );
     }
 
     /// Regression (issue 20): a diverged model's far-away or non-finite

@@ -2,7 +2,7 @@
 //! springs (d'Aulignac, Balaniuk & Laugier, §2–§3; `DESIGN.md` §2).
 //!
 //! - [`Probe`]: the rigid box (face `y = 0`, body towards `+y`, `k̂ = −y`).
-//! - [`SurfaceGrid`]: the broad phase (uniform grid, rebuilt per step).
+//! - [`SurfaceGrid`]: the broad phase (uniform grid, kept up to date per step).
 //! - [`PenaltyContact`]: Eq. 2 as a [`echothigh_model::ForceModel`], the
 //!   penetrated volume measured by sampling the face.
 //! - [`ProbeContact`]: one physics step with the probe and the queries sent
@@ -33,9 +33,9 @@ pub mod probe;
 pub mod stiffness;
 pub mod surface;
 
-pub use driver::{ContactStep, HapticSample, ProbeContact, QueryStats};
+pub use driver::{ContactStep, HapticSample, ProbeContact, QueryPath, QueryStats};
 pub use error::{ConfigError, CsvError};
-pub use grid::SurfaceGrid;
+pub use grid::{GridUpdate, SurfaceGrid};
 pub use params::ContactParams;
 pub use penalty::{PenaltyContact, SampleContact, SampleSurface, Wrench};
 pub use probe::{OrientedBox, Probe};

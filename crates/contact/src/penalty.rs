@@ -208,6 +208,13 @@ impl PenaltyContact {
         &self.grid
     }
 
+    /// Keeps the broad-phase grid up to date in place (`true`, the default)
+    /// or rebuilds it from scratch at every [`Self::prepare`] (`false`, the
+    /// implementation before issue 18); see [`SurfaceGrid::set_incremental`].
+    pub fn set_incremental_grid(&mut self, on: bool) {
+        self.grid.set_incremental(on);
+    }
+
     /// Face samples in the probe frame (m) and the area of each (m²).
     pub fn samples(&self) -> (&[Vec3], f64) {
         (&self.samples_local, self.sample_area)
@@ -238,7 +245,15 @@ impl PenaltyContact {
     /// face (used for the first-touch stiffness).
     pub fn prepare_with_reach(&mut self, x: &[Vec3], v: &[Vec3], h: f64, below: f64) {
         self.grid.rebuild(x);
-        let vmax = v.iter().map(|v| v.norm()).fold(0.0, f64::max);
+        // The fastest node (one square root, and none for h = 0).
+        let vmax = if h == 0.0 {
+            0.0
+        } else {
+            v.iter()
+                .map(|v| v.norm_squared())
+                .fold(0.0, f64::max)
+                .sqrt()
+        };
         let travel = h.abs() * (vmax + self.velocity.norm());
         let travel = if travel.is_finite() { travel } else { 0.0 };
         let inflate = self.reach + self.params.margin + travel;

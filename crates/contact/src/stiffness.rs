@@ -22,6 +22,28 @@
 //! node on one spring of stiffness `s` this is `s c / (s + c)`, the two in
 //! series. `n = −k̂` is the outward normal; with `F` the force on the
 //! tissue, `k = −∂(F·n)/∂depth`.
+//!
+//! **`T w` from the solve's own matrix** (issue 18). The solve assembles
+//! `A = T + C`; `T w = A w − C w`, and `A w` is one product through the
+//! matrix the solve packed (or its start product if the warm start already
+//! met the tolerance, [`ThighModel::solve_stiffness_with_product`]), `C w`
+//! one pass over the springs: a few µs where the matrix-free `K w` of the
+//! tissue re-evaluated every spring (~50 µs on the default mesh). On
+//! contact nodes `A w` and `C w` are both ≈ `C 1`: their difference loses
+//! `log₁₀(λ_c a / tissue)` ≈ 2 of the 16 digits, far below the solver's.
+//!
+//! **Error bound.** Let `S` zero the fixed nodes, `b = S C 1`, `w*` the exact
+//! solution and `w̃` one with residual `r = b − S A S w̃`. On free nodes
+//! `C(1 − w̃) = T w̃ + r`, so the evaluated `k(w̃) = Σ_free 1·T w̃ + (fixed
+//! terms)` equals `1ᵀC(1 − w̃) − 1ᵀS r`; with `1ᵀC(1 − w̃) − 1ᵀC(1 − w*) =
+//! −bᵀ(w̃ − w*) = bᵀ A⁻¹ r = w*ᵀ r` (A symmetric, `A w* = b`):
+//!
+//! `k(w̃) − k(w*) = (w* − 1)ᵀ S r`, so `|k(w̃) − k(w*)| ≤ |S(w* − 1)| · tol · |b|`
+//!
+//! whenever PCG stops on `|r| ≤ tol |b|` (`tol` =
+//! `integrator.stiffness_tol`). A warm and a cold solve thus agree within
+//! `2 tol |b| |S(w* − 1)|`, whatever their starts; the bound is small
+//! because `w* ≈ 1` on the contact nodes (the tissue follows the probe).
 
 use echothigh_model::{
     BlockSparse, EdgeMatrix, ForceModel, JacobianScratch, SolveStats, ThighModel, Vec3,
@@ -133,6 +155,7 @@ pub struct LocalStiffness {
     rhs: Vec<Vec3>,
     w: Vec<Vec3>,
     tw: Vec<Vec3>,
+    matrix_free: bool,
 }
 
 impl LocalStiffness {
@@ -143,13 +166,29 @@ impl LocalStiffness {
             rhs: vec![Vec3::zeros(); n],
             w: vec![Vec3::zeros(); n],
             tw: vec![Vec3::zeros(); n],
+            matrix_free: false,
         }
+    }
+
+    /// Evaluates `T w` with the matrix-free `K w` of the tissue (`true`:
+    /// the implementation before issue 18, for same-run comparisons and
+    /// tests) instead of through the solve's matrix (`false`, the default).
+    /// Both give `k` within the module's bound of the exact one.
+    pub fn set_matrix_free(&mut self, on: bool) {
+        self.matrix_free = on;
+    }
+
+    /// Forgets the previous solution: the next solve starts from `w = 0`.
+    pub fn reset(&mut self) {
+        self.w.fill(Vec3::zeros());
     }
 
     /// The quasi-static stiffness `k` (N/m) the probe feels along `k̂` with
     /// the contact springs `set`, at the model's current state, and the
     /// statistics of the extra solve. Zero for an empty set. The previous
-    /// solution warm-starts the solve.
+    /// solution warm-starts the solve (a non-finite one is dropped for
+    /// `w = 0`); the result is within `tol |b| |S(w* − 1)|` of the exact `k`
+    /// whatever the start (module docs).
     pub fn compute(&mut self, model: &mut ThighModel, set: &mut ContactSet) -> (f64, SolveStats) {
         if set.springs.is_empty() {
             return (0.0, SolveStats::default());
@@ -164,8 +203,26 @@ impl LocalStiffness {
         if self.w.iter().any(|w| !w.iter().all(|c| c.is_finite())) {
             self.w.fill(Vec3::zeros());
         }
-        let stats = model.solve_stiffness(set, &self.rhs, &mut self.w);
-        model.tissue_stiffness_product(&self.w, &mut self.tw);
+        let stats = if self.matrix_free {
+            let stats = model.solve_stiffness(set, &self.rhs, &mut self.w);
+            // tw = K w of the tissue, K = −T.
+            model.tissue_stiffness_product(&self.w, &mut self.tw);
+            stats
+        } else {
+            let stats =
+                model.solve_stiffness_with_product(set, &self.rhs, &mut self.w, &mut self.tw);
+            // tw = A w = (T + C) w; K w = −T w = C w − A w.
+            for v in &mut self.tw {
+                *v = -*v;
+            }
+            for s in &set.springs {
+                let stretch = Self::stretch(s, &dir, &self.w);
+                for (&m, &b) in s.nodes.iter().zip(&s.beta) {
+                    self.tw[m] += (s.c * b * stretch) * dir;
+                }
+            }
+            stats
+        };
         let fixed = model.fixed();
         let mut k = 0.0;
         // Free contact nodes: T = −K_tissue, so (T w)·k̂ = −(K w)·k̂.
@@ -176,12 +233,7 @@ impl LocalStiffness {
         }
         // Fixed contact nodes: (C (1 − w))·k̂ directly.
         for s in &set.springs {
-            let stretch: f64 = s
-                .nodes
-                .iter()
-                .zip(&s.beta)
-                .map(|(&m, &b)| b * dir.dot(&self.w[m]))
-                .sum();
+            let stretch = Self::stretch(s, &dir, &self.w);
             for (&m, &b) in s.nodes.iter().zip(&s.beta) {
                 if fixed[m] {
                     k += s.c * b * (1.0 - stretch);
@@ -191,8 +243,23 @@ impl LocalStiffness {
         (k, stats)
     }
 
+    /// `Σ_m β_m k̂·w_m`: the spring's surface motion per unit probe travel.
+    fn stretch(s: &ContactSpring, dir: &Vec3, w: &[Vec3]) -> f64 {
+        s.nodes
+            .iter()
+            .zip(&s.beta)
+            .map(|(&m, &b)| b * dir.dot(&w[m]))
+            .sum()
+    }
+
     /// `w = ∂x/∂δ` of the last [`Self::compute`] (m per m of probe travel).
     pub fn node_sensitivity(&self) -> &[Vec3] {
         &self.w
+    }
+
+    /// The right-hand side `C 1` (N per m of probe travel) of the last
+    /// [`Self::compute`], unfiltered.
+    pub fn rhs(&self) -> &[Vec3] {
+        &self.rhs
     }
 }

@@ -1,7 +1,7 @@
 //! The physics step with contact and the haptic queries allocate nothing
-//! after warm-up (a counting global allocator; one test, single-threaded).
+//! after warm-up (a global allocator counting per thread).
 
-use echothigh_contact::{ContactParams, Probe, ProbeContact};
+use echothigh_contact::{ContactParams, Probe, ProbeContact, QueryPath};
 use echothigh_model::{ModelConfig, ThighModel, Vec3};
 use echothigh_testkit::{count_allocations, CountingAllocator};
 
@@ -34,4 +34,46 @@ fn contact_step_and_queries_do_not_allocate() {
         "both paths exercised: {touched}"
     );
     assert_eq!(n, 0, "allocations during 40 contact steps");
+}
+
+/// Issue 18's paths: the grid kept in place (unchanged and rebinned; the
+/// full rebuild runs in the warm-up and on the reference path), the
+/// stiffness product reused from a solve that ran no iteration and computed
+/// after one that did, the distance skipped in contact; and the previous
+/// implementation ([`QueryPath::Reference`]).
+#[test]
+fn fast_and_reference_query_paths_do_not_allocate() {
+    let config = ModelConfig::default();
+    let top = config.thigh.semi_axis_y;
+    for path in [QueryPath::Fast, QueryPath::Reference] {
+        let mut model = ThighModel::new(&config).unwrap();
+        let mut pc = ProbeContact::new(&model, Probe::default(), ContactParams::default()).unwrap();
+        pc.set_query_path(path);
+        // Press 8 mm (40 steps), hold (60), slide 20 mm along the thigh (40).
+        let pose = |i: usize| {
+            let i = i as f64;
+            let d = 0.008 * (i / 40.0).min(1.0);
+            let z = 0.020 * ((i - 100.0) / 40.0).clamp(0.0, 1.0);
+            Probe::exam_pose(Vec3::new(0.0, top - d, z))
+        };
+        pc.step(&mut model, &pose(0), 0.01); // warm-up
+        let mut seen = [0usize; 5]; // rebuilt, rebinned, unchanged, 0 it, > 0 it
+        let ((), n) = count_allocations(|| {
+            for i in 1..140 {
+                let s = pc.step(&mut model, &pose(i), 0.01);
+                seen[pc.contact().grid().last_update() as usize] += 1;
+                seen[3 + usize::from(s.query.stiffness_solve.iterations > 0)] += 1;
+            }
+        });
+        assert_eq!(n, 0, "allocations during 139 contact steps ({path:?})");
+        // The warm-up built the grid; the reference rebuilds it every time.
+        let grid_paths = match path {
+            QueryPath::Fast => seen[1] > 0 && seen[2] > 0,
+            QueryPath::Reference => seen[0] == 139,
+        };
+        assert!(
+            grid_paths && seen[3] > 0 && seen[4] > 0,
+            "{path:?}: {seen:?}"
+        );
+    }
 }

@@ -517,6 +517,26 @@ impl ImplicitEuler {
         }
     }
 
+    /// `y = A x` (N for `x` in m), `A = −K` the system of the last
+    /// [`Self::solve_stiffness`] (the one actually solved, after any retry)
+    /// and `x` that solve's result, unfiltered (rows of fixed nodes
+    /// included). The SIMD kernels reuse the matrix packed by the solve (and
+    /// its start product if the solve ran no iteration); the other forms
+    /// multiply their assembled matrix. Allocates nothing.
+    ///
+    /// # Panics
+    /// If `x` or `y` is not of the system's size.
+    pub fn stiffness_solution_product(&mut self, x: &[Vec3], y: &mut [Vec3]) {
+        match (self.form, self.kernels) {
+            (SystemForm::Edge, Kernels::Simd) => {
+                assert_eq!(x.len(), y.len());
+                self.simd_pcg.solution_product(&self.edge, y);
+            }
+            (SystemForm::Edge, Kernels::Scalar) => self.edge.mul_vec(x, y),
+            (SystemForm::BlockSparse, _) => self.a.mul_vec(x, y),
+        }
+    }
+
     /// The last block-sparse system matrix (`M − λhB − λ²h²K` or `−K`)
     /// assembled in [`SystemForm::BlockSparse`].
     pub fn system_matrix(&self) -> &BlockSparse {

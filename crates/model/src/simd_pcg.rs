@@ -30,6 +30,9 @@ pub struct SimdPcg {
     q: Soa3,
     inv: [Vec<f64>; 9],
     free: Vec<f64>,
+    /// True while `q = A x` for the last solve's `x` (no iteration ran):
+    /// [`Self::solution_product`] then copies `q` instead of a product.
+    q_is_ax: bool,
 }
 
 impl SimdPcg {
@@ -47,6 +50,7 @@ impl SimdPcg {
             q: Soa3::new(layout),
             inv: std::array::from_fn(|_| z.clone()),
             free: z,
+            q_is_ax: false,
         }
     }
 
@@ -67,9 +71,31 @@ impl SimdPcg {
     /// If a length differs from [`Self::n`].
     pub fn mul_vec(&mut self, a: &EdgeMatrix, x: &[Vec3], y: &mut [Vec3]) {
         assert!(x.len() == self.n() && y.len() == self.n());
+        self.q_is_ax = false;
         self.m.pack(a);
         self.p.load(x);
         self.product(a);
+        self.q.store(y);
+    }
+
+    /// `y = A x` (N for `x` in m) for the matrix `a` and the solution `x`
+    /// of the last [`Self::solve`] with `a`, through the matrix as packed
+    /// by that solve (no repacking). If the solve ran no iteration (the
+    /// warm start met the tolerance), its start product `A x` is copied
+    /// instead of recomputed. Rows of fixed nodes are included (unfiltered
+    /// product). Allocates nothing.
+    ///
+    /// # Panics
+    /// If `y.len()` differs from [`Self::n`].
+    pub fn solution_product(&mut self, a: &EdgeMatrix, y: &mut [Vec3]) {
+        assert_eq!(y.len(), self.n());
+        if !self.q_is_ax {
+            for (p, x) in self.p.c.iter_mut().zip(&self.x.c) {
+                p.copy_from_slice(x);
+            }
+            self.product(a);
+            self.q_is_ax = true;
+        }
         self.q.store(y);
     }
 
@@ -113,6 +139,7 @@ impl SimdPcg {
         }
         self.p.load(x);
         self.product(a);
+        self.q_is_ax = true;
         std::mem::swap(&mut self.x, &mut self.p);
         self.p.clear();
         self.r.load(b);
@@ -133,6 +160,8 @@ impl SimdPcg {
         let b_norm = b2.sqrt();
         if b_norm == 0.0 {
             x.fill(Vec3::zeros());
+            self.x.clear();
+            self.q_is_ax = false;
             return SolveStats {
                 converged: true,
                 ..SolveStats::default()
@@ -162,6 +191,8 @@ impl SimdPcg {
         stats: &mut SolveStats,
     ) {
         let (pad, rounded) = (self.m.layout().pad(), self.m.layout().rounded());
+        // The products below overwrite q = A x.
+        self.q_is_ax = false;
         let mut beta = 0.0;
         while stats.iterations < params.max_iterations {
             update_direction(self.arch, &self.z, &mut self.p, beta, pad);

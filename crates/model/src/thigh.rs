@@ -143,6 +143,28 @@ impl ThighModel {
         stats
     }
 
+    /// [`Self::solve_stiffness`], then `product = A out` (N) with `A` the
+    /// system it solved (`−K` of tissue + `extra`, Dirichlet rows included,
+    /// unfiltered): with the SIMD kernels a product through the matrix the
+    /// solve packed, or the solve's own start product if it ran no
+    /// iteration; far cheaper than a matrix-free `K w` of the tissue
+    /// ([`Self::tissue_stiffness_product`]). Allocates nothing.
+    ///
+    /// # Panics
+    /// If `rhs`, `out` or `product` is not of length [`Self::node_count`].
+    pub fn solve_stiffness_with_product(
+        &mut self,
+        extra: &mut dyn ForceModel,
+        rhs: &[Vec3],
+        out: &mut [Vec3],
+        product: &mut [Vec3],
+    ) -> SolveStats {
+        assert_eq!(product.len(), self.x.len());
+        let stats = self.solve_stiffness(extra, rhs, out);
+        self.integrator.stiffness_solution_product(out, product);
+        stats
+    }
+
     fn stiffness_solve(
         &mut self,
         extra: &mut dyn ForceModel,

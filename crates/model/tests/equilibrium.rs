@@ -247,3 +247,52 @@ fn small_load_moves_its_node_by_the_static_amount_on_the_shipped_defaults() {
         "moved {u} m, static {u_ref} m, tolerance {tol} m"
     );
 }
+
+/// `solve_stiffness_with_product` returns `A w` of the system it solved:
+/// with no extra model `A = −K` of the tissue, so the product must equal
+/// the matrix-free `−K w` ([`ThighModel::tissue_stiffness_product`]) to
+/// rounding, in every matrix form and kernel, both after an iterating
+/// solve and after one whose warm start already met the tolerance (the
+/// SIMD kernels then hand back the solve's start product). Rounding bound:
+/// each of the ~10 terms of a row is a product of a spring's stiffness and
+/// `|w|`, so the two sums differ by a few `ε · Σ|terms|` ≤ `1e-12 · |K|·|w|`.
+#[test]
+fn stiffness_solution_product_equals_the_matrix_free_product() {
+    use echothigh_model::{Kernels, SystemForm};
+    for (form, kernels) in [
+        (SystemForm::Edge, Kernels::Simd),
+        (SystemForm::Edge, Kernels::Scalar),
+        (SystemForm::BlockSparse, Kernels::Simd),
+    ] {
+        let mut m = common::model(&common::small_config(24, 11));
+        m.set_system_form(form);
+        m.set_kernels(kernels);
+        common::press_top(&mut m, 8.0);
+        for _ in 0..5 {
+            m.step(0.01, &mut NoExtraForce);
+        }
+        let n = m.node_count();
+        let top = common::top_node(&m);
+        let mut rhs = vec![Vec3::zeros(); n];
+        rhs[top] = -m.mesh().rest_normals()[top];
+        let mut w = vec![Vec3::zeros(); n];
+        let (mut aw, mut kw) = (vec![Vec3::zeros(); n], vec![Vec3::zeros(); n]);
+        for pass in 0..2 {
+            // Pass 0 iterates from zero; pass 1 starts at the solution.
+            let s = m.solve_stiffness_with_product(&mut NoExtraForce, &rhs, &mut w, &mut aw);
+            assert!(s.converged, "{form:?} {kernels:?}: {s:?}");
+            assert_eq!(s.iterations == 0, pass == 1, "{form:?} {kernels:?}: {s:?}");
+            m.tissue_stiffness_product(&w, &mut kw);
+            let scale = kw.iter().map(|v| v.norm()).fold(0.0, f64::max);
+            let gap = aw
+                .iter()
+                .zip(&kw)
+                .map(|(a, k)| (a + k).norm())
+                .fold(0.0, f64::max);
+            assert!(
+                gap <= 1e-12 * scale,
+                "{form:?} {kernels:?} pass {pass}: |A w + K w| = {gap:e}, |K w| = {scale:e}"
+            );
+        }
+    }
+}

@@ -10,7 +10,8 @@
 //!
 //! `--compare` runs instead the same-run A/B of the default system (edge
 //! form, SIMD kernels) against a baseline (`--baseline scalar`: the scalar
-//! kernels; `block-sparse`: the block-sparse reference; issue 18, see
+//! kernels; `block-sparse`: the block-sparse reference; `reference-queries`:
+//! the haptic queries' previous implementation; issue 18, see
 //! [`super::physics_compare`]): the press case at each size and the
 //! contact case with its queries, reporting the ratio of the medians.
 
@@ -49,8 +50,9 @@ pub struct Args {
     #[arg(long)]
     compare: bool,
     /// The baseline of `--compare`: the scalar kernels of the edge form
-    /// (the implementation before the SIMD kernels) or the block-sparse
-    /// reference.
+    /// (the implementation before the SIMD kernels), the block-sparse
+    /// reference, or the haptic queries' previous implementation
+    /// (`reference-queries`: only the contact case differs).
     #[arg(long, value_enum, default_value = "scalar")]
     baseline: super::physics_compare::Baseline,
 }

@@ -3,7 +3,9 @@
 //! [`Kernels::Simd`]) against a baseline (`old`): the same edge form on the
 //! previous scalar kernels ([`Baseline::Scalar`], [`Kernels::Scalar`]) or
 //! the block-sparse reference ([`Baseline::BlockSparse`],
-//! [`SystemForm::BlockSparse`]). Two identical models take the same steps,
+//! [`SystemForm::BlockSparse`]), or the haptic queries' previous
+//! implementation ([`Baseline::ReferenceQueries`], [`QueryPath::Reference`]).
+//! Two identical models take the same steps,
 //! interleaved step by step (the order alternating, old–new then new–old,
 //! so neither always runs on a warmer cache), each step timed in the
 //! thread's CPU time; the report gives both medians, their ratio, and the
@@ -12,7 +14,7 @@
 
 use super::clock::{percentile, thread_cpu_us};
 use super::physics_cases::{apply_patch_load, case_model, probe_patch, stage_medians, Scenario};
-use echothigh_contact::{ContactParams, Probe, ProbeContact};
+use echothigh_contact::{ContactParams, Probe, ProbeContact, QueryPath};
 use echothigh_model::{
     ConfigError, Kernels, ModelConfig, NoExtraForce, StepStats, StepTimings, SystemForm,
     ThighModel, Vec3,
@@ -28,6 +30,12 @@ pub enum Baseline {
     Scalar,
     /// The block-sparse matrix and its PCG (the reference before the edge form).
     BlockSparse,
+    /// The default system with the haptic queries' previous implementation
+    /// ([`QueryPath::Reference`]: matrix-free `K w` after the stiffness
+    /// solve, the signed distance at every sample, the broad-phase grid
+    /// rebuilt from scratch); only the contact case differs, the press
+    /// cases run the same code on both sides.
+    ReferenceQueries,
 }
 
 impl Baseline {
@@ -36,6 +44,14 @@ impl Baseline {
         match self {
             Baseline::Scalar => model.set_kernels(Kernels::Scalar),
             Baseline::BlockSparse => model.set_system_form(SystemForm::BlockSparse),
+            Baseline::ReferenceQueries => {}
+        }
+    }
+
+    /// Sets the contact's queries up as this baseline.
+    pub fn apply_contact(self, contact: &mut ProbeContact) {
+        if self == Baseline::ReferenceQueries {
+            contact.set_query_path(QueryPath::Reference);
         }
     }
 }
@@ -189,6 +205,7 @@ pub fn compare_contact(steps: usize, baseline: Baseline) -> anyhow::Result<Compa
         ProbeContact::new(&models[0], Probe::default(), ContactParams::default())?,
         ProbeContact::new(&models[1], Probe::default(), ContactParams::default())?,
     ];
+    baseline.apply_contact(&mut contacts[1]);
     let pose = |d: f64| Probe::exam_pose(Vec3::new(0.0, top - d, 0.0));
     let ramp = 50;
     let mut sides = [Side::default(), Side::default()];
