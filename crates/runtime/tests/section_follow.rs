@@ -385,3 +385,46 @@ fn the_drawn_vessels_are_named_in_the_renderers_order() {
         }
     }
 }
+
+/// A probe pressed along its beam keeps its pose (issue 19): the pose is
+/// taken where the beam's axis meets the rest skin, not at the pressed face
+/// centre, whose `s` moved by the press depth times the thigh's taper (0.8
+/// mm for 8 mm), past the section's rebuild threshold (~0.46 mm), so the
+/// live section was rebuilt at every press. From 0 to 20 mm of press at
+/// three sites, `s` and the arc `θ·r` stay within 1 µm of the pose's (the
+/// bisection stops at 1 nm along the beam; the rest is the frame changes'
+/// rounding), and so does the tilt's effect, `δ·depth`.
+#[test]
+fn a_probe_pressed_along_its_beam_keeps_its_pose() {
+    use echothigh_runtime::section_follow::leg_pose;
+    use nalgebra::{Matrix3, Rotation3, UnitQuaternion};
+    let (leg, _) = leg_and_config();
+    let centre_s = leg.s_of_z(0.0);
+    for site in [Site::Cfv, Site::FvMid, Site::FvDistal] {
+        let pose = leg.anatomy().site_pose(site);
+        let plane = leg.anatomy().image_plane(&pose).unwrap();
+        // The tool's axes in the leg frame: x along the image's lateral
+        // axis, −y along the beam.
+        let y = -plane.depth;
+        let m = Matrix3::from_columns(&[plane.lateral, y, plane.lateral.cross(&y)]);
+        let q = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(m));
+        let r = leg.anatomy().leg().skin_radius(pose.s, pose.theta);
+        for press in [0.0, 0.004, 0.008, 0.016, 0.020] {
+            let p = plane.origin + press * plane.depth;
+            let got = leg_pose(&leg, [p.x, p.y, p.z + centre_s], [q.w, q.i, q.j, q.k]).unwrap();
+            let (ds, arc) = (got.s - pose.s, (got.theta - pose.theta) * r);
+            assert!(
+                ds.abs() < 1e-6 && arc.abs() < 1e-6,
+                "{} pressed {press} m: s moved {ds} m, θ·r {arc} m",
+                site.name()
+            );
+            assert!(
+                ((got.tilt - pose.tilt) * 0.08).abs() < 1e-6,
+                "{} pressed {press} m: tilt {} against {}",
+                site.name(),
+                got.tilt,
+                pose.tilt
+            );
+        }
+    }
+}
