@@ -51,6 +51,9 @@ pub struct FakeLive {
     gate_timed_out: AtomicBool,
     /// The double's flow (issue 17).
     pub doppler: crate::fake_doppler::FakeDoppler,
+    /// When set, frames of this size `(width, height)` of fresh noise
+    /// ([`FakeLive::speckled_images`]).
+    speckle: Mutex<Option<(u32, u32)>>,
 }
 
 /// How long a held mode change waits for its release before giving up.
@@ -67,6 +70,13 @@ impl FakeLive {
             i.rate = 100.0;
         }
         f
+    }
+
+    /// Makes every later frame `width × height` of fresh uniform noise, which
+    /// JPEG cannot compress much (like speckle): the images then spend the
+    /// connection's byte budget, as the live system's do.
+    pub fn speckled_images(&self, width: u32, height: u32) {
+        *self.speckle.lock().unwrap() = Some((width, height));
     }
 
     /// Attaches a device that drives the probe (the page's probe commands
@@ -211,10 +221,27 @@ impl LiveControl for FakeLive {
         i.frame += 1;
         let f = i.frame as u32;
         out.clear();
-        out.resize((IMAGE.0 * IMAGE.1) as usize, fake_image_level(f));
+        let size = match *self.speckle.lock().unwrap() {
+            Some((w, h)) => {
+                // SplitMix64 per frame: a different noise in every frame.
+                let mut z = i.frame;
+                out.extend((0..w * h).map(|_| {
+                    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+                    let mut x = z;
+                    x = (x ^ (x >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+                    x = (x ^ (x >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+                    (x >> 56) as u8
+                }));
+                (w, h)
+            }
+            None => {
+                out.resize((IMAGE.0 * IMAGE.1) as usize, fake_image_level(f));
+                IMAGE
+            }
+        };
         ImageInfo {
-            width: IMAGE.0,
-            height: IMAGE.1,
+            width: size.0,
+            height: size.1,
             frame: i.frame,
             time: 0.01 * i.frame as f64,
         }

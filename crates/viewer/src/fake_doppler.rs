@@ -86,6 +86,11 @@ impl FakeDoppler {
         ((n + r as u64) % 256) as u8
     }
 
+    /// How many spectral lines the double has made.
+    pub fn lines_made(&self) -> u64 {
+        self.0.lock().unwrap().lines
+    }
+
     /// The lines from `from` on (the last [`SPECTRAL_RING`]).
     pub fn lines(&self, from: u64, out: &mut SpectralLines) {
         let next = self.0.lock().unwrap().lines;

@@ -191,3 +191,48 @@ async fn spectral_mode_streams_the_lines_in_order() {
         got += h.a as usize;
     }
 }
+
+/// The byte budget (issue 19): when the images spend it (here 256 × 384
+/// frames of noise, ~70 KB each in JPEG, against 360 KB/s), the states and
+/// the spectral lines still come. Over 1.5 s at the test server's 100
+/// states/s, a page that acknowledges everything must get ≥ 100 states
+/// (two thirds of the rate: the credit never binds, and a state spends
+/// ~1 KB of the budget but no longer waits for it; before, the push waited
+/// for the budget: 13 states in 1.5 s beside 9 images), and the spectral
+/// frames must carry every line the double made
+/// for the images sent but the last push's (before, the lines came after
+/// the image and found the budget spent: none arrived).
+#[tokio::test]
+async fn images_spending_the_budget_hold_neither_states_nor_spectral_lines() {
+    let fake = Arc::new(FakeLive::new());
+    fake.speckled_images(256, 384);
+    let mut ws = connect(start(fake.clone()).await).await;
+    send(&mut ws, r#"{"type":"doppler_mode","mode":"spectral"}"#).await;
+    next_state(&mut ws, |s| {
+        s.doppler.is_some_and(|d| d.mode == DopplerMode::Spectral)
+    })
+    .await;
+    let (mut states, mut images, mut lines_end) = (0usize, 0usize, 0u64);
+    let end = tokio::time::Instant::now() + std::time::Duration::from_millis(1500);
+    while tokio::time::Instant::now() < end {
+        match next(&mut ws).await {
+            Message::Text(_) => states += 1,
+            Message::Binary(b) => match FrameHeader::parse(&b).map(|(h, _)| h) {
+                Some(h) if h.kind == FrameKind::Spectral => {
+                    let first = u64::from_le_bytes(b[16..24].try_into().unwrap());
+                    lines_end = first + u64::from(h.a);
+                }
+                Some(h) if h.kind == FrameKind::ImageJpeg => images += 1,
+                _ => {}
+            },
+            _ => {}
+        }
+    }
+    assert!(states >= 100, "{states} states in 1.5 s, {images} images");
+    assert!(images >= 2, "{images} images: the budget was not exercised");
+    let made = fake.doppler.lines_made();
+    assert!(
+        lines_end + 2 * LINES_PER_FRAME >= made && lines_end > 0,
+        "spectral lines sent up to {lines_end} of {made} made ({images} images)"
+    );
+}
