@@ -57,8 +57,8 @@ fn sinc(x: f64) -> f64 {
     }
 }
 
-/// `E(f)` of the module's formula: the spectrum of a centred `N`-cycle
-/// burst under a Hann envelope (real: the burst is symmetric about its
+/// `E(f)` of the module's formula (`f`, `f₀` in Hz, `cycles` = `N`): the
+/// spectrum of a centred `N`-cycle burst under a Hann envelope (real: the burst is symmetric about its
 /// centre), `E(f₀) = 1`. The envelope `½ (1 + cos(2πt/T))` over the burst's
 /// length `T = N / f₀` convolves the rectangle's `sinc` with three lines
 /// `1/T` apart.
