@@ -257,7 +257,12 @@ impl LiveStatus {
     }
 }
 
-/// The live imaging thread's schedule (frames/s) while a page looks.
+/// The live imaging thread's schedule (frames/s) while a page looks. A
+/// scanner's B-mode runs at 25–60 (the pulse-echo time alone, 2 · 80 mm /
+/// 1 540 m/s = 104 µs a line over 128 lines, would allow 75), but the page's
+/// byte budget (400 KB/s) carries ~9 live frames/s of speckle (~39 KB a
+/// JPEG at quality 80): a faster schedule would render frames no page
+/// receives (issue 19).
 pub const IMAGING_RATE_SETTING: f64 = 20.0;
 
 /// `x` if finite, else 0.
@@ -507,6 +512,13 @@ pub trait LiveControl: Send + Sync {
     /// counter that increases with every new frame, and the time of the
     /// physics state it shows.
     fn image(&self, out: &mut Vec<u8>) -> ImageInfo;
+    /// The counter of the latest frame ([`ImageInfo::frame`]) without its
+    /// pixels: a front end polls it to send a frame as soon as it is
+    /// rendered. This default reads the whole frame; a runtime that can tell
+    /// it cheaply overrides it.
+    fn image_frame(&self) -> u64 {
+        self.image(&mut Vec::new()).frame
+    }
     /// Current vein state.
     fn vein(&self) -> VeinState;
     /// The ranges its commands must respect ([`LiveCommand::validate`]).

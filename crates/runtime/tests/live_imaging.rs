@@ -28,8 +28,9 @@ fn wait_until(what: &str, mut done: impl FnMut() -> bool) {
 #[test]
 fn the_image_is_rendered_only_while_a_page_looks_and_the_thread_joins() {
     let system = LiveSystem::start(Scenario::default()).unwrap();
-    // Nobody looks: not one frame. 0.5 s is ten frame periods (50 ms), so a
-    // thread that rendered for nobody would have counted some.
+    // Nobody looks: not one frame. 0.5 s is ten frame periods (50 ms at 20
+    // frames/s), so a thread that rendered for nobody would have counted
+    // some.
     std::thread::sleep(Duration::from_millis(500));
     assert_eq!(frame(&system), 0, "frames rendered with no page open");
 
@@ -37,8 +38,8 @@ fn the_image_is_rendered_only_while_a_page_looks_and_the_thread_joins() {
     wait_until("a first frame for the page", || frame(&system) >= 3);
     // Its achieved rate is reported once a window of ≥ 1 s has passed. The
     // schedule never bursts to catch up (a late frame starts its period
-    // then), so a window of span T ≥ 1 s holds at most 20 T + 1 frames:
-    // the rate is at most 20 + 1/T ≤ 21 frames/s.
+    // then), so a window of span T ≥ 1 s holds at most R T + 1 frames (R
+    // the schedule's rate): the rate is at most R + 1/T ≤ R + 1 frames/s.
     let mut snap = LiveSnapshot::default();
     let rate = |snap: &mut LiveSnapshot| {
         system.snapshot(snap);

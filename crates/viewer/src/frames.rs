@@ -102,6 +102,12 @@ impl WireState {
         Some(out)
     }
 
+    /// Whether this connection already sent image frame `frame` (frame 0,
+    /// the slot before the first render, counts as sent: it is never sent).
+    pub fn has_frame(&self, frame: u64) -> bool {
+        frame == 0 || self.last_frame == Some(frame)
+    }
+
     /// The image frame for `pixels` (as described by `info`), or `None` if
     /// this connection already has that frame, it is malformed, or it is
     /// frame 0 (the image slot before the imaging thread's first render:

@@ -8,6 +8,7 @@
 //! Loopback only unless `--allow-remote`: the page drives the simulator.
 
 mod assets;
+mod display_fit;
 mod exam;
 pub mod exam_status;
 #[cfg(test)]

@@ -179,6 +179,14 @@ pub enum ViewerCommand {
     /// (flow control of the images: the next one is sent only then, so
     /// that a page slow to decode never queues images).
     ImageAck,
+    /// The box the page draws the image in (device pixels): frames are
+    /// sent reduced to fit it ([`crate::display_fit`]), never enlarged.
+    ImageSize {
+        /// Width ([`crate::display_fit::MIN_DISPLAY`]..=[`crate::display_fit::MAX_DISPLAY`]).
+        width: u32,
+        /// Height (same range).
+        height: u32,
+    },
     /// An observer tab asks to drive the probe; granted only when no other
     /// tab drives it (the driving tab closed).
     TakeControl,
@@ -261,7 +269,7 @@ pub fn decode_client(text: &str, limits: &CommandLimits) -> Result<ClientMessage
         let known = serde_json::to_value(&cmd);
         (ClientMessage::Doppler(cmd), known)
     } else if kind.starts_with("exam_")
-        || ["ack", "image_ack", "take_control"].contains(&kind.as_str())
+        || ["ack", "image_ack", "image_size", "take_control"].contains(&kind.as_str())
     {
         let cmd: ViewerCommand = serde_json::from_value(value.clone()).map_err(invalid)?;
         let known = serde_json::to_value(&cmd);
@@ -286,6 +294,19 @@ pub fn decode_client(text: &str, limits: &CommandLimits) -> Result<ClientMessage
     match &msg {
         ClientMessage::Live(cmd) => cmd.validate(limits)?,
         ClientMessage::Doppler(cmd) => cmd.validate()?,
+        ClientMessage::Viewer(ViewerCommand::ImageSize { width, height }) => {
+            use crate::display_fit::{MAX_DISPLAY, MIN_DISPLAY};
+            for (field, v) in [("width", width), ("height", height)] {
+                if !(MIN_DISPLAY..=MAX_DISPLAY).contains(v) {
+                    return Err(ProtocolError::Invalid {
+                        kind,
+                        reason: format!(
+                            "`{field}` {v} is outside {MIN_DISPLAY}..={MAX_DISPLAY} device pixels"
+                        ),
+                    });
+                }
+            }
+        }
         ClientMessage::Viewer(_) => {}
     }
     Ok(msg)

@@ -11,6 +11,7 @@
 //! is answered.
 
 use super::assets;
+use super::display_fit::DisplayFit;
 use super::exam::ExamSession;
 use super::frames::{ByteBudget, WireState, BURST_BYTES, BYTES_PER_SECOND};
 use super::protocol::{
@@ -210,7 +211,10 @@ impl AppState {
             }
             // Flow control and ownership, handled by the connection itself.
             ClientMessage::Viewer(
-                ViewerCommand::Ack { .. } | ViewerCommand::ImageAck | ViewerCommand::TakeControl,
+                ViewerCommand::Ack { .. }
+                | ViewerCommand::ImageAck
+                | ViewerCommand::ImageSize { .. }
+                | ViewerCommand::TakeControl,
             ) => Ok(()),
         }
     }
@@ -455,6 +459,8 @@ struct Conn {
     /// An image frame is on its way or being decoded by the page.
     image_pending: bool,
     wire: WireState,
+    /// The page's display box, and the frame reduced to it.
+    fit: DisplayFit,
     budget: ByteBudget,
     epoch: tokio::time::Instant,
     snap: LiveSnapshot,
@@ -478,6 +484,7 @@ impl Conn {
             acked: 0,
             image_pending: false,
             wire: WireState::default(),
+            fit: DisplayFit::default(),
             budget: ByteBudget::new(BYTES_PER_SECOND, BURST_BYTES, 0.0),
             epoch: tokio::time::Instant::now(),
             snap: LiveSnapshot::default(),
@@ -504,6 +511,12 @@ async fn handle_text(app: &Arc<AppState>, conn: &mut Conn, text: &str) -> Vec<Me
     }
     if let Ok(ClientMessage::Viewer(ViewerCommand::ImageAck)) = decoded {
         conn.image_pending = false;
+        return Vec::new();
+    }
+    if let Ok(ClientMessage::Viewer(ViewerCommand::ImageSize { width, height })) = decoded {
+        // What this page shows, not what the simulation does: an observer
+        // sets its own.
+        conn.fit.set_display(width, height);
         return Vec::new();
     }
     let claim = matches!(
@@ -540,6 +553,11 @@ async fn session(mut socket: WebSocket, app: Arc<AppState>) {
     let period = Duration::from_secs_f64(1.0 / app.config.state_rate.clamp(1.0, 120.0));
     let mut tick = tokio::time::interval(period);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
+    // A new image goes as soon as it is rendered (within this poll's
+    // period), not at the next state push (up to 25 ms later at 40 Hz):
+    // the poll reads the frame counter, an atomic, 200 times a second.
+    let mut image_poll = tokio::time::interval(IMAGE_POLL);
+    image_poll.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Skip);
     let mut ping = tokio::time::interval(app.config.idle_timeout / 3);
     ping.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     let mut conn = Conn::new(watch.1);
@@ -554,6 +572,7 @@ async fn session(mut socket: WebSocket, app: Arc<AppState>) {
                 Some(Ok(Message::Ping(_) | Message::Pong(_))) => Vec::new(),
             },
             _ = tick.tick() => push(&app, &mut conn),
+            _ = image_poll.tick() => poll_image(&app, &mut conn),
             _ = ping.tick() => vec![Message::Ping(Default::default())],
         };
         for m in outgoing {
@@ -582,10 +601,9 @@ fn reply(
 }
 
 /// The messages of one state push, latest wins: nothing while [`CREDIT`]
-/// states are unacknowledged; else the state, then, while the byte budget
-/// lasts, the surface nodes that moved, the spectral lines in spectral mode
-/// and — once the page has shown the previous image
-/// ([`ViewerCommand::ImageAck`]) — the newest image, while the budget lasts.
+/// states are unacknowledged; else the state, then the streams that wait
+/// for the byte budget ([`push_streams`]). Between pushes, a new image
+/// goes as soon as it is rendered ([`poll_image`]).
 fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
     conn.budget.refill(conn.epoch.elapsed().as_secs_f64());
     // The state goes whenever the credit allows, and spends from the byte
@@ -626,6 +644,15 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
     let state = json(ServerMessage::State(state));
     conn.budget.spend(state.to_text().map_or(0, str::len));
     out.push(state);
+    push_streams(app, conn, spectral, &mut out);
+    out
+}
+
+/// The streams that wait for the byte budget, in their order of priority,
+/// each while the budget lasts: the surface nodes that moved (of the
+/// snapshot in `conn.snap`), the spectral lines in `spectral` mode, and the
+/// newest image ([`push_image`]).
+fn push_streams(app: &AppState, conn: &mut Conn, spectral: bool, out: &mut Vec<Message>) {
     if conn.budget.allows() {
         if let Some(surface) = conn.wire.surface(&conn.snap) {
             conn.budget.spend(surface.len());
@@ -644,18 +671,63 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
             out.push(Message::Binary(frame.into()));
         }
     }
-    if conn.budget.allows() && !conn.image_pending {
-        let info = app.control.flow_image(&mut conn.pixels, &mut conn.overlay);
-        if let Some(image) = conn.wire.image(info, &conn.pixels) {
-            let image = if conn.overlay.is_empty() {
-                image
-            } else {
-                super::flow_frames::with_overlay(&image, &conn.overlay).unwrap_or(image)
-            };
-            conn.budget.spend(image.len());
-            conn.image_pending = true;
-            out.push(Message::Binary(image.into()));
-        }
+    out.extend(push_image(app, conn));
+}
+
+/// Between state pushes, a new image frame as soon as it is rendered and
+/// the page and the budget can take it, behind the streams of higher
+/// priority ([`push_streams`]: the surface and the spectral lines go first,
+/// else an image sent at each turn of the budget would starve them).
+fn poll_image(app: &AppState, conn: &mut Conn) -> Vec<Message> {
+    let mut out = Vec::new();
+    if conn.image_pending || conn.wire.has_frame(app.control.image_frame()) {
+        return out;
     }
+    conn.budget.refill(conn.epoch.elapsed().as_secs_f64());
+    if !conn.budget.allows() {
+        return out;
+    }
+    app.control.snapshot(&mut conn.snap);
+    let spectral = app
+        .control
+        .doppler_status()
+        .is_some_and(|d| d.mode == echothigh_runtime::live_doppler::DopplerMode::Spectral);
+    push_streams(app, conn, spectral, &mut out);
     out
+}
+
+/// How often a connection looks for a new image frame (s): 5 ms, a tenth
+/// of the imaging period at 20 frames/s ([`echothigh_runtime::live::IMAGING_RATE_SETTING`]).
+const IMAGE_POLL: Duration = Duration::from_millis(5);
+
+/// The newest image frame, once the page has taken the previous one
+/// ([`ViewerCommand::ImageAck`]), while the byte budget lasts, reduced to
+/// the page's display box ([`DisplayFit`]); `None` when there is no new
+/// frame or it must wait.
+fn push_image(app: &AppState, conn: &mut Conn) -> Option<Message> {
+    if conn.image_pending || !conn.budget.allows() || conn.wire.has_frame(app.control.image_frame())
+    {
+        return None;
+    }
+    let info = app.control.flow_image(&mut conn.pixels, &mut conn.overlay);
+    if conn.wire.has_frame(info.frame) {
+        return None;
+    }
+    let fitted = conn
+        .fit
+        .fit(info.width, info.height, &conn.pixels, &conn.overlay)?;
+    let sized = echothigh_runtime::live::ImageInfo {
+        width: fitted.width,
+        height: fitted.height,
+        ..info
+    };
+    let image = conn.wire.image(sized, fitted.pixels)?;
+    let image = if fitted.overlay.is_empty() {
+        image
+    } else {
+        super::flow_frames::with_overlay(&image, fitted.overlay).unwrap_or(image)
+    };
+    conn.budget.spend(image.len());
+    conn.image_pending = true;
+    Some(Message::Binary(image.into()))
 }

@@ -254,6 +254,7 @@ impl LiveSystem {
             watchers: AtomicUsize::new(0),
             haptic_priority: AtomicU8::new(0),
             imaging_rate: std::sync::atomic::AtomicU64::new(0),
+            image_frame: std::sync::atomic::AtomicU64::new(0),
             fault: Mutex::new(None),
             device: Mutex::new(None),
         });
@@ -490,6 +491,10 @@ impl LiveControl for LiveSystem {
             Ok(m) => m.clone(),
             Err(e) => e.into_inner().clone(),
         }
+    }
+
+    fn image_frame(&self) -> u64 {
+        self.shared.image_frame.load(Ordering::Acquire)
     }
 
     fn image_geometry(&self) -> crate::live::ImageGeometry {

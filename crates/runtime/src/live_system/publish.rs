@@ -129,7 +129,7 @@ impl Publisher {
     }
 }
 
-/// The imaging thread: renders the section under the probe at ~20 frames/s
+/// The imaging thread: renders the section under the probe at [`crate::live::IMAGING_RATE_SETTING`]
 /// while a page looks ([`Shared::watchers`] > 0) and sleeps otherwise.
 pub(super) struct ImagingThread {
     stop: Arc<AtomicBool>,
@@ -193,7 +193,7 @@ impl ImagingThread {
 /// when nobody unparks it (s); a page opening or a stop unparks it at once.
 const IDLE_NAP: Duration = Duration::from_millis(200);
 
-/// The imaging thread's body: until `stop`, render a frame every 50 ms
+/// The imaging thread's body: until `stop`, render a frame every 1 / [`crate::live::IMAGING_RATE_SETTING`] s
 /// while a page looks, park while none does; with each frame, write the
 /// reading of the section under the probe into `reading`.
 fn imaging_loop(
@@ -305,6 +305,9 @@ fn imaging_loop(
             slot.frame += 1;
             slot.time = input.time;
             slot.field.depth = drawn_depth;
+            // Published after the slot is written: a reader who sees the
+            // number finds that frame (or a newer one) in the slot.
+            shared.image_frame.store(slot.frame, Ordering::Release);
             slot.frame
         };
         reading.write(lumens.map(|l| {
@@ -417,6 +420,7 @@ mod tests {
             watchers: AtomicUsize::new(1),
             haptic_priority: AtomicU8::new(0),
             imaging_rate: std::sync::atomic::AtomicU64::new(0),
+            image_frame: std::sync::atomic::AtomicU64::new(0),
             fault: Mutex::new(None),
         });
         // An image of no rows: the scenario loader refuses it, so it is set

@@ -97,6 +97,9 @@ pub(super) struct Shared {
     /// The imaging thread's achieved frames/s over its last second, as
     /// `f64` bits (0 while no page looks).
     pub imaging_rate: AtomicU64,
+    /// [`ImageSlot::frame`] of the latest frame, stored once the slot holds
+    /// it: read without the slot's lock by a front end polling for frames.
+    pub image_frame: AtomicU64,
     /// The last error of a thread of the live system, for the page; cleared
     /// when a new session starts.
     pub fault: Mutex<Option<String>>,

@@ -70,7 +70,7 @@ let ws = null;
 function connect() {
   ws = new WebSocket(`${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}/ws`);
   ws.binaryType = 'arraybuffer';
-  ws.onopen = () => { live.connected = true; setConn(true); };
+  ws.onopen = () => { live.connected = true; setConn(true); imageBox = null; sendImageBox(); };
   ws.onclose = () => { live.connected = false; setConn(false); setTimeout(connect, 1000); };
   ws.onmessage = (ev) => {
     if (typeof ev.data === 'string') { live.bytes += ev.data.length; onJson(ev.data); }
@@ -89,6 +89,23 @@ function send(msg) {
   if (ws && ws.readyState === WebSocket.OPEN) ws.send(JSON.stringify(msg));
 }
 live.send = send;
+
+// The box the image is drawn in, in device pixels (issue 19): the server
+// sends each frame reduced to fit it, as a scanner scan-converts to its
+// monitor (a 1280 × 800 page shows ~230 × 350 of the 512 × 864 rendered).
+let imageBox = null;
+function sendImageBox() {
+  const r = $('echo').getBoundingClientRect();
+  const dpr = window.devicePixelRatio || 1;
+  const side = (x) => Math.min(8192, Math.max(16, Math.round(x * dpr)));
+  const box = [side(r.width), side(r.height)];
+  if (imageBox && imageBox[0] === box[0] && imageBox[1] === box[1]) return;
+  if (ws && ws.readyState === WebSocket.OPEN) {
+    imageBox = box;
+    send({ type: 'image_size', width: box[0], height: box[1] });
+  }
+}
+new ResizeObserver(sendImageBox).observe($('echo'));
 
 function onJson(text) {
   const msg = JSON.parse(text);

@@ -3,6 +3,7 @@
 //! server end to end over a real WebSocket.
 
 mod device;
+mod display;
 mod doppler;
 mod protocol;
 mod resume;
