@@ -504,6 +504,19 @@ impl ForceModel for TissueForces {
             .map(|((n, h_min), (x, dx))| path_fraction(n, *h_min, x, dx))
             .fold(1.0, f64::min)
     }
+
+    /// [`TissueForces::add_stiffness_product`]: the springs' blocks as the
+    /// edge assembly writes them with `β = 0`.
+    fn add_jacobian_product(
+        &mut self,
+        x: &[Vec3],
+        alpha: f64,
+        w: &[Vec3],
+        out: &mut [Vec3],
+    ) -> bool {
+        self.add_stiffness_product(x, alpha, w, out);
+        true
+    }
 }
 
 #[cfg(test)]
