@@ -10,7 +10,8 @@
 mod common;
 
 use echothigh_model::{
-    BlockSparse, EdgeMatrix, ForceModel, JacobianScratch, NoExtraForce, ThighModel, Vec3,
+    BlockSparse, EdgeMatrix, ForceModel, JacobianScratch, Kernels, NoExtraForce, SystemForm,
+    ThighModel, Vec3,
 };
 
 /// `|S(b − A w)| / |S b|` with `A = −K` of the tissue assembled block-sparse.
@@ -36,10 +37,23 @@ fn relative_residual(m: &mut ThighModel, rhs: &[Vec3], w: &[Vec3]) -> f64 {
 /// when it exceeds it, and every result meets the tolerance.
 #[test]
 fn the_assembly_is_skipped_only_when_the_warm_start_meets_the_tolerance() {
-    let mut m = common::model(&common::small_config(24, 11));
+    for (form, kernels) in [
+        (SystemForm::Edge, Kernels::Simd),
+        (SystemForm::Edge, Kernels::Scalar),
+        (SystemForm::BlockSparse, Kernels::Simd),
+    ] {
+        let mut m = common::model(&common::small_config(24, 11));
+        m.set_system_form(form);
+        m.set_kernels(kernels);
+        check_skips(&mut m);
+    }
+}
+
+/// Runs the press on `m` (see the test above).
+fn check_skips(m: &mut ThighModel) {
     let tol = m.config().integrator.stiffness_tol;
     let n = m.node_count();
-    let top = common::top_node(&m);
+    let top = common::top_node(m);
     let mut rhs = vec![Vec3::zeros(); n];
     rhs[top] = -m.mesh().rest_normals()[top] * 100.0;
     let (mut w, mut aw, mut kw) = (
@@ -54,7 +68,7 @@ fn the_assembly_is_skipped_only_when_the_warm_start_meets_the_tolerance() {
             20..=59 => 8.0,
             _ => 0.0,
         };
-        common::press_top(&mut m, load);
+        common::press_top(m, load);
         m.step(0.01, &mut NoExtraForce);
         let mut start = w.clone();
         for (s, &f) in start.iter_mut().zip(m.fixed()) {
@@ -62,10 +76,10 @@ fn the_assembly_is_skipped_only_when_the_warm_start_meets_the_tolerance() {
                 *s = Vec3::zeros();
             }
         }
-        let before = relative_residual(&mut m, &rhs, &start);
+        let before = relative_residual(m, &rhs, &start);
         let s = m.solve_stiffness_with_product(&mut NoExtraForce, &rhs, &mut w, &mut aw);
         assert!(s.converged, "step {i}: {s:?}");
-        let after = relative_residual(&mut m, &rhs, &w);
+        let after = relative_residual(m, &rhs, &w);
         assert!(after <= tol * (1.0 + 1e-9), "step {i}: residual {after:e}");
         if m.stiffness_unassembled() {
             skipped += 1;
