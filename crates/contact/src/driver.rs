@@ -72,6 +72,11 @@ pub struct QueryStats {
     pub stiffness_springs: usize,
     /// The extra solve of the stiffness.
     pub stiffness_solve: SolveStats,
+    /// True if that solve's warm start passed the stop test matrix-free
+    /// and nothing was assembled
+    /// ([`ThighModel::solve_stiffness_with_product`]).
+    #[serde(default)]
+    pub stiffness_unassembled: bool,
     /// True if the distance came from the surface query (out of contact).
     pub geometric_distance: bool,
     /// Time of the queries' stages (s): `broad_phase` (their own),
@@ -355,6 +360,7 @@ impl ProbeContact {
             let (k, stats) = self.stiffness.compute(model, &mut self.set);
             timings.stiffness_solve += seconds_since(clock);
             query.stiffness_solve = stats;
+            query.stiffness_unassembled = model.stiffness_unassembled();
             k
         };
         if !in_contact {

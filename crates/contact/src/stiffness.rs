@@ -32,6 +32,14 @@
 //! contact nodes `A w` and `C w` are both ≈ `C 1`: their difference loses
 //! `log₁₀(λ_c a / tissue)` ≈ 2 of the 16 digits, far below the solver's.
 //!
+//! **Warm start without assembly** (issue 18). While the probe holds, the
+//! previous `w` usually meets the solver's stop test as it is; the model
+//! then checks it with a matrix-free `A w̃` (tissue, then these springs'
+//! `C w̃`) and assembles nothing
+//! ([`ThighModel::solve_stiffness_with_product`]). That `A w̃` is the same
+//! operator at the same state, so `T w = A w − C w` below and the bound
+//! that follows are unchanged.
+//!
 //! **Error bound.** Let `S` zero the fixed nodes, `b = S C 1`, `w*` the exact
 //! solution and `w̃` one with residual `r = b − S A S w̃`. On free nodes
 //! `C(1 − w̃) = T w̃ + r`, so the evaluated `k(w̃) = Σ_free 1·T w̃ + (fixed
@@ -129,6 +137,26 @@ impl ForceModel for ContactSet {
         for s in &self.springs {
             PenaltyContact::add_sample_block(a, &s.blocks, &s.beta, &kk, alpha * s.c);
         }
+    }
+
+    /// `out += α ∂F/∂x w = −α C w`: spring by spring, `−α c s β_m k̂` on
+    /// node `m` with `s = Σ_m β_m k̂·w_m` (the rank-one terms assembled
+    /// below, applied without assembly).
+    fn add_jacobian_product(
+        &mut self,
+        _x: &[Vec3],
+        alpha: f64,
+        w: &[Vec3],
+        out: &mut [Vec3],
+    ) -> bool {
+        let dir = self.direction;
+        for s in &self.springs {
+            let stretch = LocalStiffness::stretch(s, &dir, w);
+            for (&m, &b) in s.nodes.iter().zip(&s.beta) {
+                out[m] -= (alpha * s.c * b * stretch) * dir;
+            }
+        }
+        true
     }
 
     /// Edge-form assembly: each spring is the rank-one term `−α c (β ⊗ k̂)(β ⊗ k̂)ᵀ`.

@@ -70,6 +70,24 @@ pub trait ForceModel {
         let _ = (x, dx);
         1.0
     }
+
+    /// Adds `α (∂F/∂x) w` into `out` (N for `α` = 1 and `w` in m) at `x`
+    /// without assembling anything, `∂F/∂x` being the Jacobian that
+    /// [`Self::add_scaled_jacobians_edge`] assembles with `β = 0`, and
+    /// returns true. The default cannot (returns false, `out` untouched):
+    /// a caller must then assemble. Used to test a warm start of the
+    /// stiffness solve before paying for an assembly
+    /// ([`crate::ThighModel::solve_stiffness_with_product`]).
+    fn add_jacobian_product(
+        &mut self,
+        x: &[Vec3],
+        alpha: f64,
+        w: &[Vec3],
+        out: &mut [Vec3],
+    ) -> bool {
+        let _ = (x, alpha, w, out);
+        false
+    }
 }
 
 /// Scratch matrices for [`ForceModel::add_scaled_jacobians`]'s default.
@@ -125,6 +143,16 @@ impl ForceModel for NoExtraForce {
         _a: &mut EdgeMatrix,
         _scratch: &mut JacobianScratch,
     ) {
+    }
+
+    fn add_jacobian_product(
+        &mut self,
+        _x: &[Vec3],
+        _a: f64,
+        _w: &[Vec3],
+        _out: &mut [Vec3],
+    ) -> bool {
+        true
     }
 }
 
@@ -203,5 +231,17 @@ impl ForceModel for SumForce<'_> {
         self.first
             .max_step_fraction(x, dx)
             .min(self.second.max_step_fraction(x, dx))
+    }
+
+    /// True only if both models can (`out` then holds both products).
+    fn add_jacobian_product(
+        &mut self,
+        x: &[Vec3],
+        alpha: f64,
+        w: &[Vec3],
+        out: &mut [Vec3],
+    ) -> bool {
+        self.first.add_jacobian_product(x, alpha, w, out)
+            && self.second.add_jacobian_product(x, alpha, w, out)
     }
 }

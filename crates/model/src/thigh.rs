@@ -43,6 +43,11 @@ pub struct ThighModel {
     external: Vec<Vec3>,
     time: f64,
     last: StepStats,
+    /// The last [`Self::solve_stiffness_with_product`] needed no iteration:
+    /// the next warm start is then tried without assembling.
+    stiffness_warm_hit: bool,
+    /// The last [`Self::solve_stiffness_with_product`] assembled nothing.
+    stiffness_unassembled: bool,
 }
 
 impl ThighModel {
@@ -77,6 +82,8 @@ impl ThighModel {
             mass,
             time: 0.0,
             last: StepStats::default(),
+            stiffness_warm_hit: false,
+            stiffness_unassembled: false,
         })
     }
 
@@ -125,6 +132,7 @@ impl ThighModel {
         rhs: &[Vec3],
         out: &mut [Vec3],
     ) -> SolveStats {
+        self.stiffness_unassembled = false;
         let full = self.tissue.geometric_in_compression();
         let mut stats = self.stiffness_solve(extra, rhs, out);
         if stats.indefinite && full {
@@ -145,10 +153,31 @@ impl ThighModel {
 
     /// [`Self::solve_stiffness`], then `product = A out` (N) with `A` the
     /// system it solved (`−K` of tissue + `extra`, Dirichlet rows included,
-    /// unfiltered): with the SIMD kernels a product through the matrix the
-    /// solve packed, or the solve's own start product if it ran no
-    /// iteration; far cheaper than a matrix-free `K w` of the tissue
-    /// ([`Self::tissue_stiffness_product`]). Allocates nothing.
+    /// unfiltered). Allocates nothing.
+    ///
+    /// **Warm start without assembly** (issue 18). While the probe holds,
+    /// the previous solution usually meets the tolerance as it is, and the
+    /// solve's cost is then all set-up: assembling `A`, packing it, its
+    /// preconditioner, one product. So when the last call ran no iteration,
+    /// this one first evaluates `A w̃` of the filtered warm start `w̃`
+    /// matrix-free ([`ForceModel::add_jacobian_product`], tissue then
+    /// `extra`) and applies the solver's own stop test, `|S(b − A w̃)| ≤
+    /// tol |S b|` (`tol` = `integrator.stiffness_tol`). If it holds, `w̃` is
+    /// returned with that product and nothing is assembled: this is the
+    /// solve's own answer, the one PCG gives when its start meets the test
+    /// (same operator, `A` at the current state; the product differs from
+    /// the assembled one by rounding only), so the contact crate's bound
+    /// `|k(w̃) − k*| ≤ tol |b| |S(w* − 1)|` holds unchanged. If it fails,
+    /// or a model cannot multiply without assembling, the solve runs as
+    /// usual (the matrix-free product, about one assembly's cost, is then
+    /// lost; the next call assembles directly until a solve needs no
+    /// iteration again). [`Self::stiffness_unassembled`] tells which way
+    /// the last call went.
+    ///
+    /// Otherwise `product` comes, with the SIMD kernels, from a product
+    /// through the matrix the solve packed, or the solve's own start
+    /// product if it ran no iteration; far cheaper than a matrix-free `K w`
+    /// of the tissue ([`Self::tissue_stiffness_product`]).
     ///
     /// # Panics
     /// If `rhs`, `out` or `product` is not of length [`Self::node_count`].
@@ -159,10 +188,62 @@ impl ThighModel {
         out: &mut [Vec3],
         product: &mut [Vec3],
     ) -> SolveStats {
-        assert_eq!(product.len(), self.x.len());
+        assert!(product.len() == self.x.len() && rhs.len() == self.x.len());
+        self.stiffness_unassembled = false;
+        if self.stiffness_warm_hit {
+            if let Some(residual) = self.unassembled_start(extra, rhs, out, product) {
+                self.stiffness_unassembled = true;
+                return SolveStats {
+                    converged: true,
+                    residual,
+                    ..SolveStats::default()
+                };
+            }
+        }
         let stats = self.solve_stiffness(extra, rhs, out);
         self.integrator.stiffness_solution_product(out, product);
+        self.stiffness_warm_hit = stats.converged && stats.iterations == 0 && !stats.indefinite;
         stats
+    }
+
+    /// True if the last [`Self::solve_stiffness_with_product`] returned its
+    /// warm start checked matrix-free, with no assembly.
+    pub fn stiffness_unassembled(&self) -> bool {
+        self.stiffness_unassembled
+    }
+
+    /// Filters `w` (fixed nodes to zero), sets `product = A w` matrix-free
+    /// and returns `|S(b − A w)| / |S b|` if PCG's stop test accepts `w`
+    /// as it is (`None` if not, if `|S b| = 0`, or if a model cannot
+    /// multiply without assembling).
+    fn unassembled_start(
+        &mut self,
+        extra: &mut dyn ForceModel,
+        rhs: &[Vec3],
+        w: &mut [Vec3],
+        product: &mut [Vec3],
+    ) -> Option<f64> {
+        let fixed = self.mesh.fixed();
+        filter(w, fixed);
+        product.fill(Vec3::zeros());
+        // A = −∂F/∂x: α = −1.
+        let x = &self.x;
+        if !(self.tissue.add_jacobian_product(x, -1.0, w, product)
+            && extra.add_jacobian_product(x, -1.0, w, product))
+        {
+            return None;
+        }
+        let (mut b2, mut r2) = (0.0, 0.0);
+        for ((b, q), &f) in rhs.iter().zip(product.iter()).zip(fixed) {
+            if !f {
+                b2 += b.norm_squared();
+                r2 += (b - q).norm_squared();
+            }
+        }
+        let (b_norm, r_norm) = (b2.sqrt(), r2.sqrt());
+        // PCG's own test (NaN fails it).
+        (b_norm > 0.0 && r_norm <= self.config.integrator.stiffness_tol * b_norm)
+            .then(|| r_norm / b_norm)
     }
 
     fn stiffness_solve(

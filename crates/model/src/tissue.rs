@@ -289,14 +289,7 @@ impl TissueForces {
     pub fn add_stiffness_product(&self, x: &[Vec3], alpha: f64, w: &[Vec3], out: &mut [Vec3]) {
         let geo = self.geometric_in_compression;
         for s in &self.springs {
-            let Some((d, g)) = spring_direction(s, x, geo) else {
-                continue;
-            };
-            // S u = (a − g) (d·u) d + g u, u = w_j − w_i.
-            let u = w[s.j] - w[s.i];
-            let su = (d * ((s.a - g) * d.dot(&u)) + u * g) * alpha;
-            out[s.i] += su;
-            out[s.j] -= su;
+            add_spring_product(s, x, (alpha, geo), w, out);
         }
         for s in &self.normals {
             let (p, q) = s.scaled_block(&x[s.node], alpha, 0.0);
@@ -313,6 +306,26 @@ impl TissueForces {
             .map(|s| -s.extension(&x[s.node]) * s.a / s.b)
             .fold(f64::NEG_INFINITY, f64::max)
     }
+}
+
+/// `out += α K w` of one linear spring: `S u` on node `i` and `−S u` on
+/// `j`, `S u = (a − g)(d·u) d + g u`, `u = w_j − w_i` (nothing for a
+/// spring of zero length).
+#[inline(always)]
+fn add_spring_product(
+    s: &LinearSpring,
+    x: &[Vec3],
+    (alpha, geo): (f64, bool),
+    w: &[Vec3],
+    out: &mut [Vec3],
+) {
+    let Some((d, g)) = spring_direction(s, x, geo) else {
+        return;
+    };
+    let u = w[s.j] - w[s.i];
+    let su = (d * ((s.a - g) * d.dot(&u)) + u * g) * alpha;
+    out[s.i] += su;
+    out[s.j] -= su;
 }
 
 /// Force on node `i` of a linear spring and its damper (N):
@@ -503,6 +516,29 @@ impl ForceModel for TissueForces {
             .zip(x.iter().zip(dx))
             .map(|((n, h_min), (x, dx))| path_fraction(n, *h_min, x, dx))
             .fold(1.0, f64::min)
+    }
+
+    /// [`TissueForces::add_stiffness_product`] (the springs' blocks as the
+    /// edge assembly writes them with `β = 0`); with the SIMD kernels the
+    /// classes' springs and the normal springs go through the stencil's
+    /// product kernel, the springs left over through the scalar code.
+    fn add_jacobian_product(
+        &mut self,
+        x: &[Vec3],
+        alpha: f64,
+        w: &[Vec3],
+        out: &mut [Vec3],
+    ) -> bool {
+        let geo = self.geometric_in_compression;
+        if self.kernels != Kernels::Simd {
+            self.add_stiffness_product(x, alpha, w, out);
+            return true;
+        }
+        self.stencil.add_stiffness_product(x, w, (alpha, geo), out);
+        for &e in self.stencil.leftover() {
+            add_spring_product(&self.springs[e], x, (alpha, geo), w, out);
+        }
+        true
     }
 }
 

@@ -20,6 +20,8 @@
 // Component and lane loops index several arrays at once.
 #![allow(clippy::needless_range_loop)]
 
+mod product;
+
 use crate::simd::{chunks, dispatch, lanes, view, view_mut, SimdSqrt, SqrtKernel};
 use crate::stencil::{Soa3, StencilClass, StencilLayout};
 use crate::Vec3;
