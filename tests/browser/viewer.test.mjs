@@ -53,6 +53,9 @@ const forceOf = () => {
 
 /** Fraction of the canvas's pixels that differ from its background, and distinct colours. */
 const canvasInk = (id) => {
+  // The 3D view drawn in a worker (issue 19) reads its own pixels back in
+  // the task that draws them.
+  if (id === 'scene' && window.echothigh.scene && window.echothigh.scene.ink) return window.echothigh.scene.ink();
   // The 3D view does not preserve its drawing buffer: draw it in this task.
   if (id === 'scene' && window.echothigh.scene) window.echothigh.scene.render();
   const src = document.getElementById(id);

@@ -39,6 +39,16 @@ pub const ASSETS: &[Asset] = &[
         body: include_bytes!("../assets/web/scene.js"),
     },
     Asset {
+        path: "/scene_proxy.js",
+        content_type: JS,
+        body: include_bytes!("../assets/web/scene_proxy.js"),
+    },
+    Asset {
+        path: "/scene_worker.js",
+        content_type: JS,
+        body: include_bytes!("../assets/web/scene_worker.js"),
+    },
+    Asset {
         path: "/panels.js",
         content_type: JS,
         body: include_bytes!("../assets/web/panels.js"),

@@ -3,6 +3,7 @@
 // server's `view/protocol.rs` (JSON envelopes {v, type, ...}; binary frames
 // with a 16-byte header "ETHV", version, kind, a, b).
 import { ThighScene } from './scene.js';
+import { SceneProxy, workerDrawingAvailable } from './scene_proxy.js';
 import { EchoView, ForcePlot, Gauge, IMAGING_RATE, drawDepthScale, drawVesselNames, norm, showStatus } from './panels.js';
 import { showExam } from './exam.js';
 import { deviceDrives, showDevice } from './device.js';
@@ -43,11 +44,18 @@ function stamp(list, value = performance.now()) {
 }
 
 let scene = null;
-try {
-  scene = new ThighScene($('scene'));
-} catch (e) {
-  $('scene-msg').textContent = `3D view unavailable (WebGL): ${e.message}`;
+function sceneUnavailable(message) {
+  $('scene-msg').textContent = `3D view unavailable (WebGL): ${message}`;
   $('scene-msg').classList.remove('hidden');
+}
+try {
+  // Drawn in a worker where the browser can (issue 19: off the page's
+  // thread, which handles the states and images), else here.
+  scene = workerDrawingAvailable($('scene'))
+    ? new SceneProxy($('scene'), sceneUnavailable)
+    : new ThighScene($('scene'), window.devicePixelRatio);
+} catch (e) {
+  sceneUnavailable(e.message);
 }
 live.scene = scene; // for the browser test and the console
 const echo = new EchoView($('echo'));
@@ -452,17 +460,40 @@ let fpsWindow = { t: performance.now(), frames: 0, echo: 0 };
 // leg leaves the page free to take the states as they come (issue 19's
 // lag) and the simulation its cores.
 const REDRAW_MS = 500, SLOW_MS = 60, FAST_MS = 30;
-const adapt = { last: performance.now(), smooth: 16, changed: performance.now(), drawn: 0, rendered: false };
+const adapt = { last: performance.now(), smooth: 16, changed: performance.now(), drawn: 0, rendered: false, seen: 0 };
 /** Smooths the intervals that follow a drawn frame (what drawing costs) and steps the scale. */
 function adaptScale(now) {
   const dt = now - adapt.last;
   adapt.last = now;
+  if (scene instanceof SceneProxy) return adaptWorkerScale(now);
   if (adapt.rendered) adapt.smooth += 0.1 * (Math.min(dt, 1000) - adapt.smooth);
   adapt.rendered = false;
   if (!scene || now - adapt.changed < 1000) return;
   if (adapt.smooth > SLOW_MS && scene.scale > 0.5) { scene.setScale(scene.scale * 0.8); adapt.changed = now; }
   else if (adapt.smooth < FAST_MS && scene.scale < 1) { scene.setScale(scene.scale / 0.8); adapt.changed = now; }
 }
+/**
+ * The scale of a view drawn in a worker follows its render's own cost (the
+ * page's frame intervals no longer show it), smoothed as above; on a
+ * software rasterizer it stays at half (its pixels are drawn on the cores
+ * the simulation runs on).
+ */
+function adaptWorkerScale(now) {
+  const costs = scene.costs;
+  const fresh = Math.min(scene.frames - adapt.seen, costs.length);
+  for (const c of costs.slice(costs.length - fresh)) adapt.smooth += 0.1 * (Math.min(c, 1000) - adapt.smooth);
+  adapt.seen = scene.frames;
+  if (now - adapt.changed < 1000) return;
+  const top = scene.software ? 0.5 : 1;
+  if (adapt.smooth > SLOW_MS && scene.scale > 0.5) { scene.setScale(scene.scale * 0.8); adapt.changed = now; }
+  else if (adapt.smooth < FAST_MS && scene.scale < top) { scene.setScale(Math.min(scene.scale / 0.8, top)); adapt.changed = now; }
+}
+/** A frame the worker drew: its cost and arrival for the page's figures. */
+function workerRendered(cost) {
+  stamp(live.arrivals.render);
+  stamp(live.costs.render, cost);
+}
+if (scene instanceof SceneProxy) scene.onRendered = workerRendered;
 // On a software rasterizer a 3D frame holds the page's thread until the
 // rasterizer has drawn it (the compositor reads it back): at most one every
 // SOFTWARE_MIN_MS there, so that the states are taken as they come.
@@ -473,8 +504,12 @@ function frame(now) {
   const due = !scene || !scene.software || now - adapt.drawn >= SOFTWARE_MIN_MS;
   if (scene && due && (scene.dirty || now - adapt.drawn > REDRAW_MS)) {
     const t = performance.now();
-    scene.render(); adapt.drawn = now; adapt.rendered = true; stamp(live.arrivals.render);
-    stamp(live.costs.render, performance.now() - t);
+    scene.render(); adapt.drawn = now;
+    // A worker's frame is counted when it reports it drawn (workerRendered).
+    if (!(scene instanceof SceneProxy)) {
+      adapt.rendered = true; stamp(live.arrivals.render);
+      stamp(live.costs.render, performance.now() - t);
+    }
   }
   if (plot.dirty) plot.draw();
   fpsWindow.frames += 1;

@@ -3,39 +3,11 @@
 // force, whether it still answers) and its workspace, the device's reach mapped on the leg by the
 // calibration, drawn as a box in the 3D view. The state's `haptic_device`
 // is null while the mouse drives; then all of this stays hidden.
-import * as THREE from 'three';
 import { norm } from './panels.js';
-
-// The box's 12 edges: corners i and j differ in one bit (bit k set: the
-// box's maximum along the device's axis k).
-const EDGES = [[0, 1], [2, 3], [4, 5], [6, 7], [0, 2], [1, 3], [4, 6], [5, 7], [0, 4], [1, 5], [2, 6], [3, 7]];
-
-let box = null; // THREE.LineSegments of the workspace, built on first use
 
 /** Whether a device drives the probe (the page's probe controls are off). */
 export function deviceDrives(s) {
   return !!(s && s.haptic_device);
-}
-
-function drawWorkspace(scene, corners) {
-  if (!scene) return;
-  if (!box) {
-    const geom = new THREE.BufferGeometry();
-    geom.setAttribute('position', new THREE.BufferAttribute(new Float32Array(EDGES.length * 6), 3));
-    box = new THREE.LineSegments(geom, new THREE.LineDashedMaterial({
-      color: 0x3d8bff, dashSize: 0.01, gapSize: 0.006, transparent: true, opacity: 0.8 }));
-    scene.scene.add(box);
-  }
-  box.visible = !!corners;
-  if (!corners) return;
-  const pos = box.geometry.attributes.position;
-  EDGES.forEach(([a, b], e) => {
-    pos.setXYZ(2 * e, corners[a][0], corners[a][1], corners[a][2]);
-    pos.setXYZ(2 * e + 1, corners[b][0], corners[b][1], corners[b][2]);
-  });
-  pos.needsUpdate = true;
-  box.geometry.computeBoundingSphere();
-  box.computeLineDistances();
 }
 
 /** Shows the device's panel and workspace for state `s` (hidden without a device). */
@@ -47,7 +19,7 @@ export function showDevice(s, scene) {
   // The mouse's help line gives way to the device's strip (a class, not the
   // line's `hidden`, which the guided start owns).
   document.body.classList.toggle('device-drives', !!d);
-  drawWorkspace(scene, d ? d.workspace : null);
+  if (scene) scene.setWorkspace(d ? d.workspace : null);
   if (!d) return;
   const set = (id, text) => { document.getElementById(id).textContent = text; };
   set('dev-name', d.name);

@@ -1,7 +1,10 @@
 // The 3D view: the thigh surface deforming and coloured by compression, the
-// probe box, the device and proxy markers, the force vectors. Positions in m,
-// thigh frame (z along the axis, y anterior = up), which three.js shows as is.
-import * as THREE from 'three';
+// probe box, the device and proxy markers, the force vectors, a real
+// device's workspace. Positions in m, thigh frame (z along the axis, y
+// anterior = up), which three.js shows as is. The same class draws in a
+// worker on an OffscreenCanvas (scene_worker.js) and, without a renderer,
+// answers the page's picks on its thread (scene_proxy.js).
+import * as THREE from './vendor/three.module.min.js';
 
 const BACKGROUND = 0x1b2029;
 const REST = new THREE.Color(0xecbf9f);
@@ -22,10 +25,15 @@ function compressionColour(c, out) {
   return out;
 }
 
+// The workspace box's 12 edges: corners i and j differ in one bit (bit k
+// set: the box's maximum along the device's axis k).
+const EDGES = [[0, 1], [2, 3], [4, 5], [6, 7], [0, 2], [1, 3], [4, 6], [5, 7], [0, 4], [1, 5], [2, 6], [3, 7]];
+
 /** Whether WebGL runs on a software rasterizer (SwiftShader, llvmpipe): no GPU. */
-function softwareRenderer() {
+export function softwareRenderer() {
   try {
-    const gl = document.createElement('canvas').getContext('webgl2');
+    const probe = typeof document !== 'undefined' ? document.createElement('canvas') : new OffscreenCanvas(1, 1);
+    const gl = probe.getContext('webgl2');
     if (!gl) return false;
     const info = gl.getExtension('WEBGL_debug_renderer_info');
     const name = String(info ? gl.getParameter(info.UNMASKED_RENDERER_WEBGL) : gl.getParameter(gl.RENDERER));
@@ -38,8 +46,25 @@ function softwareRenderer() {
 }
 
 export class ThighScene {
-  constructor(canvas) {
+  /**
+   * `canvas`: an HTMLCanvasElement or an OffscreenCanvas; `pixelRatio`:
+   * the screen's device pixels per CSS pixel; `draw`: false for a scene
+   * that only answers picks (no WebGL context: the canvas draws elsewhere).
+   */
+  constructor(canvas, pixelRatio = 1, draw = true) {
     this.canvas = canvas;
+    this.pixelRatio = Math.min(pixelRatio || 1, 2);
+    this.target = new THREE.Vector3();
+    this.orbit = { azimuth: 0.75, elevation: 0.45, distance: 0.75 };
+    this.camera = new THREE.PerspectiveCamera(40, 1, 0.005, 10);
+    this.raycaster = new THREE.Raycaster();
+    this.restMesh = null;
+    this.onLeg = false;
+    this.scale = 1;
+    this.dirty = true;
+    this.frames = 0;
+    this.renderer = null;
+    if (!draw) return;
     // On a software renderer (no GPU: SwiftShader or llvmpipe) the page's
     // thread hands every frame to the compositor by a copy, and a
     // multisampled one is resolved first: without antialiasing, and with
@@ -49,30 +74,22 @@ export class ThighScene {
     const software = softwareRenderer();
     this.software = software;
     this.renderer = new THREE.WebGLRenderer({ canvas, antialias: !software, preserveDrawingBuffer: false });
-    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2));
+    this.renderer.setPixelRatio(this.pixelRatio);
     // Resolution scale (1: the screen's pixels): lowered by the page when
     // frames come slowly (software WebGL on a busy laptop), so that drawing
     // the leg does not starve the state handling and the simulation.
-    this.scale = 1;
     // A software rasterizer draws every pixel on the CPU the simulation
     // shares: start at half the resolution (a quarter of the pixels).
     if (software) this.setScale(0.5);
-    // Something changed since the last render (the page draws only then).
-    this.dirty = true;
     this.scene = new THREE.Scene();
     this.scene.background = new THREE.Color(BACKGROUND);
-    this.camera = new THREE.PerspectiveCamera(40, 1, 0.005, 10);
-    this.target = new THREE.Vector3();
-    this.orbit = { azimuth: 0.75, elevation: 0.45, distance: 0.75 };
     this.scene.add(new THREE.HemisphereLight(0xffffff, 0x404050, 1.4));
     const sun = new THREE.DirectionalLight(0xffffff, 1.6);
     sun.position.set(0.4, 1.0, 0.6);
     this.scene.add(sun);
     this.thigh = null;
-    this.restMesh = null;
-    this.raycaster = new THREE.Raycaster();
+    this.workspace = null;
     this.buildProbe();
-    this.frames = 0;
   }
 
   buildProbe() {
@@ -113,24 +130,12 @@ export class ThighScene {
   /** Builds the thigh from the server's `hello` mesh ({rest: [[x,y,z]], triangles: [[a,b,c]]}). */
   setMesh(mesh) {
     this.dirty = true;
-    if (this.thigh) { this.scene.remove(this.thigh); this.thigh.geometry.dispose(); }
     const n = mesh.rest.length;
     const rest = new Float32Array(n * 3);
     mesh.rest.forEach((p, i) => rest.set(p, i * 3));
     const index = new Uint32Array(mesh.triangles.length * 3);
     mesh.triangles.forEach((t, i) => index.set(t, i * 3));
-    const colours = new Float32Array(n * 3);
-    const c = new THREE.Color();
-    for (let i = 0; i < n; i++) compressionColour(0, c).toArray(colours, i * 3);
-
-    const geom = new THREE.BufferGeometry();
-    geom.setAttribute('position', new THREE.BufferAttribute(rest.slice(), 3));
-    geom.setAttribute('color', new THREE.BufferAttribute(colours, 3));
-    geom.setIndex(new THREE.BufferAttribute(index, 1));
-    geom.computeVertexNormals();
-    this.thigh = new THREE.Mesh(geom, new THREE.MeshStandardMaterial({
-      vertexColors: true, side: THREE.DoubleSide, roughness: 0.75, metalness: 0.0 }));
-    this.scene.add(this.thigh);
+    if (this.renderer) this.buildThigh(n, rest, index);
 
     // The rest surface, invisible, is what the mouse ray hits: dragging
     // follows the undeformed surface, as the runtime's (theta, z) expects.
@@ -147,6 +152,23 @@ export class ThighScene {
     this.semiX = Math.max(Math.abs(restGeom.boundingBox.min.x), Math.abs(restGeom.boundingBox.max.x));
     this.semiY = Math.max(Math.abs(restGeom.boundingBox.min.y), Math.abs(restGeom.boundingBox.max.y));
     this.orbit.distance = 3.0 * restGeom.boundingSphere.radius;
+  }
+
+  /** The drawn thigh of `n` nodes (`rest` 3n positions, `index` triangles). */
+  buildThigh(n, rest, index) {
+    if (this.thigh) { this.scene.remove(this.thigh); this.thigh.geometry.dispose(); }
+    const colours = new Float32Array(n * 3);
+    const c = new THREE.Color();
+    for (let i = 0; i < n; i++) compressionColour(0, c).toArray(colours, i * 3);
+
+    const geom = new THREE.BufferGeometry();
+    geom.setAttribute('position', new THREE.BufferAttribute(rest.slice(), 3));
+    geom.setAttribute('color', new THREE.BufferAttribute(colours, 3));
+    geom.setIndex(new THREE.BufferAttribute(index, 1));
+    geom.computeVertexNormals();
+    this.thigh = new THREE.Mesh(geom, new THREE.MeshStandardMaterial({
+      vertexColors: true, side: THREE.DoubleSide, roughness: 0.75, metalness: 0.0 }));
+    this.scene.add(this.thigh);
   }
 
   /** Applies a surface frame: `positions` (3n f32, m) and `compression` (n f32, 0..1). */
@@ -170,6 +192,7 @@ export class ThighScene {
   updateState(s) {
     this.dirty = true;
     this.onLeg = s.level != null;
+    if (!this.renderer) return;
     const v = (a) => new THREE.Vector3(a[0], a[1], a[2]);
     const [w, x, y, z] = s.probe_orientation;
     const valid = Math.abs(w * w + x * x + y * y + z * z - 1) < 0.1;
@@ -198,6 +221,8 @@ export class ThighScene {
   pick(clientX, clientY) {
     if (!this.restMesh) return null;
     const r = this.canvas.getBoundingClientRect();
+    if (r.width === 0 || r.height === 0) return null;
+    this.placeCamera(r.width, r.height);
     const ndc = new THREE.Vector2(((clientX - r.left) / r.width) * 2 - 1, -((clientY - r.top) / r.height) * 2 + 1);
     this.raycaster.setFromCamera(ndc, this.camera);
     const hit = this.raycaster.intersectObject(this.restMesh, false)[0];
@@ -229,19 +254,17 @@ export class ThighScene {
     const s = Math.min(Math.max(scale, 0.5), 1);
     if (s === this.scale) return;
     this.scale = s;
-    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 2) * s);
+    if (this.renderer) this.renderer.setPixelRatio(this.pixelRatio * s);
     this.size = null;
     this.dirty = true;
   }
 
-  render() {
-    const w = this.canvas.clientWidth, h = this.canvas.clientHeight;
-    if (w === 0 || h === 0) return;
-    this.dirty = false;
-    const size = `${w}x${h}`;
-    if (this.size !== size) {
-      this.size = size;
-      this.renderer.setSize(w, h, false);
+  /**
+   * The camera for a view `w` × `h` (CSS pixels) of the orbit about the
+   * thigh's centre: the drawing and the picks use the same one.
+   */
+  placeCamera(w, h) {
+    if (this.camera.aspect !== w / h) {
       this.camera.aspect = w / h;
       this.camera.updateProjectionMatrix();
     }
@@ -251,7 +274,71 @@ export class ThighScene {
       this.target.y + o.distance * Math.sin(o.elevation),
       this.target.z + o.distance * Math.cos(o.elevation) * Math.cos(o.azimuth));
     this.camera.lookAt(this.target);
+    this.camera.updateMatrixWorld();
+  }
+
+  /**
+   * The real device's workspace (8 corners, m, or null: hidden) as a
+   * dashed box (issue 15).
+   */
+  setWorkspace(corners) {
+    if (!this.renderer) return;
+    if (!corners) {
+      if (this.workspace && this.workspace.visible) { this.workspace.visible = false; this.dirty = true; }
+      return;
+    }
+    this.dirty = true;
+    if (!this.workspace) {
+      const geom = new THREE.BufferGeometry();
+      geom.setAttribute('position', new THREE.BufferAttribute(new Float32Array(EDGES.length * 6), 3));
+      this.workspace = new THREE.LineSegments(geom, new THREE.LineDashedMaterial({
+        color: 0x3d8bff, dashSize: 0.01, gapSize: 0.006, transparent: true, opacity: 0.8 }));
+      this.scene.add(this.workspace);
+    }
+    const box = this.workspace;
+    box.visible = true;
+    const pos = box.geometry.attributes.position;
+    EDGES.forEach(([a, b], e) => {
+      pos.setXYZ(2 * e, corners[a][0], corners[a][1], corners[a][2]);
+      pos.setXYZ(2 * e + 1, corners[b][0], corners[b][1], corners[b][2]);
+    });
+    pos.needsUpdate = true;
+    box.geometry.computeBoundingSphere();
+    box.computeLineDistances();
+  }
+
+  /** Draws the view, `w` × `h` CSS pixels (the canvas's own size by default). */
+  render(w = this.canvas.clientWidth, h = this.canvas.clientHeight) {
+    if (!this.renderer || w === 0 || h === 0) return;
+    this.dirty = false;
+    const size = `${w}x${h}`;
+    if (this.size !== size) {
+      this.size = size;
+      this.renderer.setSize(w, h, false);
+    }
+    this.placeCamera(w, h);
     this.renderer.render(this.scene, this.camera);
     this.frames += 1;
+  }
+
+  /**
+   * What the last render drew, read back at once (the drawing buffer is
+   * not preserved): the fraction of pixels off the background colour and
+   * the count of distinct colours among every 16th pixel, for the browser
+   * test.
+   */
+  ink() {
+    const gl = this.renderer.getContext();
+    const w = gl.drawingBufferWidth, h = gl.drawingBufferHeight;
+    const d = new Uint8Array(4 * w * h);
+    gl.readPixels(0, 0, w, h, gl.RGBA, gl.UNSIGNED_BYTE, d);
+    const bg = [d[0], d[1], d[2]];
+    let ink = 0;
+    const colours = new Set();
+    for (let i = 0; i < d.length; i += 4) {
+      if (Math.abs(d[i] - bg[0]) + Math.abs(d[i + 1] - bg[1]) + Math.abs(d[i + 2] - bg[2]) > 24) ink++;
+      if (i % 64 === 0) colours.add((d[i] << 16) | (d[i + 1] << 8) | d[i + 2]);
+    }
+    return { fraction: ink / (w * h), colours: colours.size, width: w, height: h };
   }
 }
