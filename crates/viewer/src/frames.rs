@@ -196,8 +196,12 @@ pub fn encode_png(
 /// the WebSocket framing and the pings, which this count does not see.
 pub const BYTES_PER_SECOND: f64 = 360_000.0;
 
-/// Burst allowance of [`ByteBudget`] (bytes): about half a key frame.
-pub const BURST_BYTES: f64 = 40_000.0;
+/// Burst allowance of [`ByteBudget`] (bytes): three live frames (~39 KB
+/// each). While the probe holds still the images go at
+/// [`super::image_pace::STILL_RATE`] and the budget they leave builds up
+/// here, so that the frames showing the next press go at once; over any
+/// span the bytes stay within `rate · T + burst + one message`.
+pub const BURST_BYTES: f64 = 120_000.0;
 
 /// A token bucket of bytes: a message may go while the balance is positive,
 /// and its size is then taken from it (the balance may go below zero by one
@@ -232,6 +236,13 @@ impl ByteBudget {
     /// Whether a message may go now.
     pub fn allows(&self) -> bool {
         self.tokens > 0.0
+    }
+
+    /// Whether a message may go now, drawing on `reserve` bytes below an
+    /// empty bucket (the balance may then go below `-reserve` by one
+    /// message).
+    pub fn allows_with(&self, reserve: f64) -> bool {
+        self.tokens > -reserve
     }
 
     /// Takes a sent message's `bytes` from the balance.
@@ -398,6 +409,38 @@ mod tests {
             rms <= s0 / 3.0,
             "error {rms} levels rms, speckle spread {s0}"
         );
+    }
+
+    /// With a reserve drawn on by some offers (the frames answering a
+    /// probe command), the bound grows by the reserve: over any run,
+    /// bytes let through ≤ rate · T + burst + reserve + one message.
+    #[test]
+    fn the_reserve_adds_at_most_itself_to_the_bound() {
+        let mut rng = ChaCha8Rng::seed_from_u64(23);
+        let reserve = 80_000.0;
+        let mut b = ByteBudget::new(BYTES_PER_SECOND, BURST_BYTES, 0.0);
+        let (mut t, mut sent, mut largest) = (0.0, 0.0, 0usize);
+        let mut drew = false;
+        for _ in 0..20_000 {
+            t += rng.gen_range(0.0..0.02);
+            b.refill(t);
+            let size = rng.gen_range(100..70_000);
+            let responding = rng.gen_bool(0.3);
+            let ok = if responding {
+                b.allows_with(reserve)
+            } else {
+                b.allows()
+            };
+            if ok {
+                drew |= !b.allows();
+                b.spend(size);
+                sent += size as f64;
+                largest = largest.max(size);
+            }
+        }
+        assert!(drew, "no offer drew on the reserve");
+        assert!(sent <= BYTES_PER_SECOND * t + BURST_BYTES + reserve + largest as f64);
+        assert!(sent > 0.9 * BYTES_PER_SECOND * t, "{} B/s", sent / t);
     }
 
     /// The bucket's bound: over any run of offers, bytes let through ≤

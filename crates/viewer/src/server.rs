@@ -14,6 +14,7 @@ use super::assets;
 use super::display_fit::DisplayFit;
 use super::exam::ExamSession;
 use super::frames::{ByteBudget, WireState, BURST_BYTES, BYTES_PER_SECOND};
+use super::image_pace::ImagePace;
 use super::protocol::{
     decode_client, ClientMessage, Envelope, ServerMessage, ViewState, ViewerCommand, CREDIT,
     PROTOCOL_VERSION,
@@ -25,6 +26,7 @@ use axum::response::{IntoResponse, Response};
 use axum::routing::get;
 use axum::Router;
 use echothigh_runtime::live::{LiveCommand, LiveControl, LiveSnapshot};
+use echothigh_runtime::live_doppler::DopplerMode;
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::time::Duration;
 
@@ -461,6 +463,11 @@ struct Conn {
     wire: WireState,
     /// The page's display box, and the frame reduced to it.
     fit: DisplayFit,
+    /// When the next image may go ([`ImagePace`]).
+    pace: ImagePace,
+    /// Until when (s on `epoch`) this page's images answer its last probe
+    /// command ([`super::image_pace::RESPONSE_WINDOW`]).
+    respond_until: f64,
     budget: ByteBudget,
     epoch: tokio::time::Instant,
     snap: LiveSnapshot,
@@ -485,6 +492,8 @@ impl Conn {
             image_pending: false,
             wire: WireState::default(),
             fit: DisplayFit::default(),
+            pace: ImagePace::default(),
+            respond_until: f64::NEG_INFINITY,
             budget: ByteBudget::new(BYTES_PER_SECOND, BURST_BYTES, 0.0),
             epoch: tokio::time::Instant::now(),
             snap: LiveSnapshot::default(),
@@ -523,10 +532,21 @@ async fn handle_text(app: &Arc<AppState>, conn: &mut Conn, text: &str) -> Vec<Me
         decoded,
         Ok(ClientMessage::Viewer(ViewerCommand::TakeControl))
     );
+    let moves_probe = matches!(
+        decoded,
+        Ok(ClientMessage::Live(
+            LiveCommand::Probe { .. } | LiveCommand::Lift
+        ))
+    );
     if decoded.is_ok() && !app.drives(conn.id, claim) {
         return vec![json(ServerMessage::Error {
             message: "this tab only observes: another tab drives the probe (close it, then take control here)".into(),
         })];
+    }
+    if moves_probe {
+        // The frames that show this command's effect go first (issue 19).
+        conn.respond_until =
+            conn.epoch.elapsed().as_secs_f64() + super::image_pace::RESPONSE_WINDOW;
     }
     let app = app.clone();
     tokio::task::spawn_blocking(move || reply(&app, decoded))
@@ -621,6 +641,7 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
         // A new leg: its mesh first, then the whole surface again.
         conn.mesh_epoch = epoch;
         conn.wire = WireState::default();
+        conn.pace.reset();
         let hello = json(ServerMessage::Hello {
             mesh: app.control.mesh(),
             state_rate: app.config.state_rate,
@@ -638,21 +659,25 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
         .map_or(0.0, |d| d.as_secs_f64() * 1e3);
     state.observer = !app.drives(conn.id, false);
     state.doppler = app.control.doppler_status();
-    let spectral = state
-        .doppler
-        .is_some_and(|d| d.mode == echothigh_runtime::live_doppler::DopplerMode::Spectral);
+    let mode = state.doppler.map(|d| d.mode);
     let state = json(ServerMessage::State(state));
     conn.budget.spend(state.to_text().map_or(0, str::len));
     out.push(state);
-    push_streams(app, conn, spectral, &mut out);
+    push_streams(app, conn, mode, &mut out);
     out
 }
 
 /// The streams that wait for the byte budget, in their order of priority,
 /// each while the budget lasts: the surface nodes that moved (of the
-/// snapshot in `conn.snap`), the spectral lines in `spectral` mode, and the
-/// newest image ([`push_image`]).
-fn push_streams(app: &AppState, conn: &mut Conn, spectral: bool, out: &mut Vec<Message>) {
+/// snapshot in `conn.snap`), the spectral lines in spectral Doppler `mode`,
+/// and the newest image ([`push_image`]).
+fn push_streams(
+    app: &AppState,
+    conn: &mut Conn,
+    mode: Option<DopplerMode>,
+    out: &mut Vec<Message>,
+) {
+    let spectral = mode == Some(DopplerMode::Spectral);
     if conn.budget.allows() {
         if let Some(surface) = conn.wire.surface(&conn.snap) {
             conn.budget.spend(surface.len());
@@ -671,7 +696,8 @@ fn push_streams(app: &AppState, conn: &mut Conn, spectral: bool, out: &mut Vec<M
             out.push(Message::Binary(frame.into()));
         }
     }
-    out.extend(push_image(app, conn));
+    let flow = matches!(mode, Some(DopplerMode::Color | DopplerMode::Power));
+    out.extend(push_image(app, conn, flow));
 }
 
 /// Between state pushes, a new image frame as soon as it is rendered and
@@ -683,17 +709,27 @@ fn poll_image(app: &AppState, conn: &mut Conn) -> Vec<Message> {
     if conn.image_pending || conn.wire.has_frame(app.control.image_frame()) {
         return out;
     }
-    conn.budget.refill(conn.epoch.elapsed().as_secs_f64());
-    if !conn.budget.allows() {
+    let now = conn.epoch.elapsed().as_secs_f64();
+    conn.budget.refill(now);
+    if !image_budget(conn, now) {
         return out;
     }
     app.control.snapshot(&mut conn.snap);
-    let spectral = app
-        .control
-        .doppler_status()
-        .is_some_and(|d| d.mode == echothigh_runtime::live_doppler::DopplerMode::Spectral);
-    push_streams(app, conn, spectral, &mut out);
+    let mode = app.control.doppler_status().map(|d| d.mode);
+    push_streams(app, conn, mode, &mut out);
     out
+}
+
+/// Whether the byte budget lets an image go at `now`: the frames answering
+/// this page's probe command may overdraw it by a reserve
+/// ([`super::image_pace::RESPONSE_RESERVE`]), repaid by the frames after
+/// them.
+fn image_budget(conn: &Conn, now: f64) -> bool {
+    if now < conn.respond_until {
+        conn.budget.allows_with(super::image_pace::RESPONSE_RESERVE)
+    } else {
+        conn.budget.allows()
+    }
 }
 
 /// How often a connection looks for a new image frame (s): 5 ms, a tenth
@@ -701,11 +737,21 @@ fn poll_image(app: &AppState, conn: &mut Conn) -> Vec<Message> {
 const IMAGE_POLL: Duration = Duration::from_millis(5);
 
 /// The newest image frame, once the page has taken the previous one
-/// ([`ViewerCommand::ImageAck`]), while the byte budget lasts, reduced to
-/// the page's display box ([`DisplayFit`]); `None` when there is no new
-/// frame or it must wait.
-fn push_image(app: &AppState, conn: &mut Conn) -> Option<Message> {
-    if conn.image_pending || !conn.budget.allows() || conn.wire.has_frame(app.control.image_frame())
+/// ([`ViewerCommand::ImageAck`]), while the byte budget lasts, when it is
+/// due ([`ImagePace`]: at once while the probe in `conn.snap` moves or
+/// `flow` colours it, a few a second while it holds still), reduced to the
+/// page's display box ([`DisplayFit`]); `None` when there is no new frame
+/// or it must wait.
+fn push_image(app: &AppState, conn: &mut Conn, flow: bool) -> Option<Message> {
+    let now = conn.epoch.elapsed().as_secs_f64();
+    let (force, position) = (
+        conn.snap.status.physics_force,
+        conn.snap.status.probe_position,
+    );
+    if conn.image_pending
+        || !image_budget(conn, now)
+        || !conn.pace.due(now, force, position, flow)
+        || conn.wire.has_frame(app.control.image_frame())
     {
         return None;
     }
@@ -729,5 +775,6 @@ fn push_image(app: &AppState, conn: &mut Conn) -> Option<Message> {
     };
     conn.budget.spend(image.len());
     conn.image_pending = true;
+    conn.pace.sent(now, force, position);
     Some(Message::Binary(image.into()))
 }

@@ -74,7 +74,14 @@ pub(super) async fn next_raw(ws: &mut Client) -> Message {
 /// once, as a page that keeps up does (flow control).
 pub(super) async fn next(ws: &mut Client) -> Message {
     let m = next_raw(ws).await;
-    if let Message::Binary(b) = &m {
+    acknowledge(ws, &m).await;
+    m
+}
+
+/// Acknowledges `m` if it is a state or an image, as a page that keeps up
+/// does (flow control).
+pub(super) async fn acknowledge(ws: &mut Client, m: &Message) {
+    if let Message::Binary(b) = m {
         if matches!(
             FrameHeader::parse(b),
             Some((h, _)) if matches!(
@@ -85,7 +92,7 @@ pub(super) async fn next(ws: &mut Client) -> Message {
             send(ws, r#"{"type":"image_ack"}"#).await;
         }
     }
-    if let Message::Text(t) = &m {
+    if let Message::Text(t) = m {
         if let Ok(Envelope {
             body: ServerMessage::State(s),
             ..
@@ -94,7 +101,6 @@ pub(super) async fn next(ws: &mut Client) -> Message {
             send(ws, &format!(r#"{{"type":"ack","seq":{}}}"#, s.seq)).await;
         }
     }
-    m
 }
 
 /// Next JSON message satisfying `pred`, skipping others.
