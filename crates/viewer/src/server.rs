@@ -468,6 +468,11 @@ struct Conn {
     /// Until when (s on `epoch`) this page's images answer its last probe
     /// command ([`super::image_pace::RESPONSE_WINDOW`]).
     respond_until: f64,
+    /// The simulated time (s) of the newest state this connection had when
+    /// that command came: a frame of an older state cannot show it.
+    command_time: f64,
+    /// A frame left unsent for that reason (not read again).
+    skipped: u64,
     budget: ByteBudget,
     epoch: tokio::time::Instant,
     snap: LiveSnapshot,
@@ -494,6 +499,8 @@ impl Conn {
             fit: DisplayFit::default(),
             pace: ImagePace::default(),
             respond_until: f64::NEG_INFINITY,
+            command_time: f64::NEG_INFINITY,
+            skipped: 0,
             budget: ByteBudget::new(BYTES_PER_SECOND, BURST_BYTES, 0.0),
             epoch: tokio::time::Instant::now(),
             snap: LiveSnapshot::default(),
@@ -547,6 +554,7 @@ async fn handle_text(app: &Arc<AppState>, conn: &mut Conn, text: &str) -> Vec<Me
         // The frames that show this command's effect go first (issue 19).
         conn.respond_until =
             conn.epoch.elapsed().as_secs_f64() + super::image_pace::RESPONSE_WINDOW;
+        conn.command_time = conn.snap.status.time;
     }
     let app = app.clone();
     tokio::task::spawn_blocking(move || reply(&app, decoded))
@@ -748,15 +756,22 @@ fn push_image(app: &AppState, conn: &mut Conn, flow: bool) -> Option<Message> {
         conn.snap.status.physics_force,
         conn.snap.status.probe_position,
     );
-    if conn.image_pending
-        || !image_budget(conn, now)
-        || !conn.pace.due(now, force, position, flow)
-        || conn.wire.has_frame(app.control.image_frame())
+    if conn.image_pending || !image_budget(conn, now) || !conn.pace.due(now, force, position, flow)
     {
+        return None;
+    }
+    let newest = app.control.image_frame();
+    if conn.wire.has_frame(newest) || newest == conn.skipped {
         return None;
     }
     let info = app.control.flow_image(&mut conn.pixels, &mut conn.overlay);
     if conn.wire.has_frame(info.frame) {
+        return None;
+    }
+    if now < conn.respond_until && info.time < conn.command_time {
+        // Rendered before the page's command: it cannot show its effect,
+        // and would spend the reserve the frame that does needs.
+        conn.skipped = info.frame;
         return None;
     }
     let fitted = conn
