@@ -171,6 +171,7 @@ fn add_taps<const AVX2: bool>(out: &mut [[f32; 2]], w: &[[f32; 2]], c: [f32; 2])
 /// a last odd tap through the scalar loop.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
+#[inline] // into the AVX2 splat: a call per scatterer costs as much as its taps
 fn add_taps_avx2(out: &mut [[f32; 2]], w: &[[f32; 2]], c: [f32; 2]) {
     use std::arch::x86_64::*;
     let n = out.len().min(w.len());
