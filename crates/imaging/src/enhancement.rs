@@ -89,28 +89,20 @@ impl LossBlur {
     ) {
         let cols = loss.len() / rows;
         let n = 2 * self.half + 1;
-        let out = &mut out[..rows];
-        // The rows averaged: zero sums there, the column's own loss
-        // elsewhere.
-        let averaged = |i: usize| i >= start && distance <= (self.row_half[i] + 1) as f64 + margin;
-        for (i, o) in out.iter_mut().enumerate() {
-            *o = if averaged(i) { 0.0 } else { loss[j * rows + i] };
-        }
-        // Neighbour column by neighbour column (offset `kk` increasing),
-        // each row's sum gains its terms in the order a row-by-row sum
-        // adds them, hence the same floats, while the loss of each
-        // neighbour is read along its column (contiguous) rather than
-        // across the columns (one cache line per term).
-        for kk in 0..n {
-            let c = (j + kk).saturating_sub(self.half).min(cols - 1);
-            let src = &loss[c * rows..(c + 1) * rows];
-            for (i, (o, &l)) in out.iter_mut().zip(src).enumerate().skip(start) {
-                let h = self.row_half[i];
-                if kk + h < self.half || kk > self.half + h || !averaged(i) {
-                    continue;
-                }
-                *o += self.weights[i * n + kk] * l;
+        for (i, o) in out.iter_mut().enumerate().take(rows) {
+            let h = self.row_half[i];
+            if i < start || distance > (h + 1) as f64 + margin {
+                *o = loss[j * rows + i];
+                continue;
             }
+            let w = &self.weights[i * n..(i + 1) * n];
+            let mut acc = 0.0;
+            let first = self.half - h;
+            for (kk, &wk) in w.iter().enumerate().skip(first).take(2 * h + 1) {
+                let c = (j + kk).saturating_sub(self.half).min(cols - 1);
+                acc += wk * loss[c * rows + i];
+            }
+            *o = acc;
         }
     }
 }
