@@ -35,6 +35,10 @@ pub(crate) struct PsfTables {
     /// `lateral[(k + lat_half) · rows + i]`: lateral weight at offset `k`
     /// columns for image row `i` (zero past the row's support).
     pub lateral: Vec<f32>,
+    /// `lateral` with each weight twice, `[w, w]`, at the same index: the
+    /// factor of a complex sample's two floats, loaded as is by the AVX2
+    /// convolution (no shuffle per tap).
+    pub lateral_pairs: Vec<[f32; 2]>,
     /// Elevation weight per splat row (`row + pad`) for tissue (slice average).
     pub elev_diffuse: Vec<f32>,
     /// Elevation weight per splat row for point targets on the image plane.
@@ -171,11 +175,13 @@ impl PsfTables {
             })
             .collect();
         let k0 = 2.0 * PI * cfg.center_frequency / c;
+        let lateral_pairs = lateral.iter().map(|&w| [w, w]).collect();
         PsfTables {
             axial,
             lat_half,
             block_half,
             lateral,
+            lateral_pairs,
             elev_diffuse,
             elev_point,
             slice_sigma,

@@ -25,7 +25,7 @@ use crate::scatterers::ScattererField;
 use crate::smoke::{Smoke, SmokePhase, ROLL as SMOKE_ROLL};
 use crate::specular::SpecularField;
 use crate::stages::{
-    column_loss, compress_column, convolve_column, image_depth, splat_add, splat_column, Additive,
+    column_loss, compress_column, convolve_frame, image_depth, splat_add, splat_column, Additive,
     FrameGeometry, LogCompression,
 };
 use crate::warp::{compensated_ratio, VesselWarp, WarpSet, MAX_VESSELS};
@@ -740,9 +740,7 @@ impl Renderer {
             );
         }
         let rows = self.cfg.rows;
-        for (j, col) in self.iq.chunks_mut(rows).enumerate() {
-            convolve_column(t, &self.rf, pr, self.pad, j, col);
-        }
+        convolve_frame::<AVX2>(t, &self.rf, pr, self.pad, rows, &mut self.iq);
         let h = f.halo;
         let pan_m = self.pan_columns as f64 * self.cfg.pixel_width();
         let adds = Additives {
