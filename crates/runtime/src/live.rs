@@ -519,6 +519,10 @@ pub trait LiveControl: Send + Sync {
     fn image_frame(&self) -> u64 {
         self.image(&mut Vec::new()).frame
     }
+    /// Asks for the next frame as soon as it can be rendered rather than
+    /// at its schedule (a front end answering the trainee's command; the
+    /// runtime bounds how often). A runtime without a schedule ignores it.
+    fn hurry_image(&self) {}
     /// Current vein state.
     fn vein(&self) -> VeinState;
     /// The ranges its commands must respect ([`LiveCommand::validate`]).

@@ -711,15 +711,27 @@ fn push_streams(
 /// Between state pushes, a new image frame as soon as it is rendered and
 /// the page and the budget can take it, behind the streams of higher
 /// priority ([`push_streams`]: the surface and the spectral lines go first,
-/// else an image sent at each turn of the budget would starve them).
+/// else an image sent at each turn of the budget would starve them). While
+/// the frames answer the page's probe command and the newest is sent, the
+/// runtime is asked to render the next at once
+/// ([`echothigh_runtime::live::LiveControl::hurry_image`]).
 fn poll_image(app: &AppState, conn: &mut Conn) -> Vec<Message> {
     let mut out = Vec::new();
-    if conn.image_pending || conn.wire.has_frame(app.control.image_frame()) {
+    if conn.image_pending {
         return out;
     }
     let now = conn.epoch.elapsed().as_secs_f64();
     conn.budget.refill(now);
     if !image_budget(conn, now) {
+        return out;
+    }
+    let newest = app.control.image_frame();
+    if conn.wire.has_frame(newest) || newest == conn.skipped {
+        // Nothing new to send: while the frames answer the page's command,
+        // the next one is rendered as soon as the runtime can.
+        if now < conn.respond_until {
+            app.control.hurry_image();
+        }
         return out;
     }
     app.control.snapshot(&mut conn.snap);

@@ -255,6 +255,7 @@ impl LiveSystem {
             haptic_priority: AtomicU8::new(0),
             imaging_rate: std::sync::atomic::AtomicU64::new(0),
             image_frame: std::sync::atomic::AtomicU64::new(0),
+            hurry_image: std::sync::atomic::AtomicBool::new(false),
             fault: Mutex::new(None),
             device: Mutex::new(None),
         });
@@ -495,6 +496,13 @@ impl LiveControl for LiveSystem {
 
     fn image_frame(&self) -> u64 {
         self.shared.image_frame.load(Ordering::Acquire)
+    }
+
+    fn hurry_image(&self) {
+        self.shared.hurry_image.store(true, Ordering::Release);
+        if let Ok(Some(t)) = self.imaging.lock().as_deref() {
+            t.wake();
+        }
     }
 
     fn image_geometry(&self) -> crate::live::ImageGeometry {

@@ -228,6 +228,7 @@ fn imaging_loop(
             (window, frames) = (next, 0);
             continue;
         }
+        let started = Instant::now();
         let v = shared.vein.load(Ordering::Relaxed);
         if v != vein {
             source.set_vein(cfg, vein_of(v))?;
@@ -333,13 +334,40 @@ fn imaging_loop(
             (window, frames) = (now, 0);
         }
         next += period;
-        if next > now {
-            std::thread::park_timeout(next - now);
-        } else {
-            next = now;
-        }
+        wait_for_frame(shared, stop, started, &mut next);
     }
     Ok(())
+}
+
+/// The shortest time between the starts of two frames when a front end
+/// hurries them ([`crate::live::LiveControl::hurry_image`]): 25 ms, at most
+/// 40 frames a second (a live frame costs ~10 ms of a core in release).
+const HURRY_INTERVAL: Duration = Duration::from_millis(25);
+
+/// Waits until the frame scheduled at `next` is due, or, when a front end
+/// hurries the next frame, until [`HURRY_INTERVAL`] after `started` (the
+/// last frame's start), whichever comes first; returns at once on `stop`.
+/// A late schedule starts its period now (the frames never burst to catch
+/// up).
+fn wait_for_frame(shared: &Shared, stop: &AtomicBool, started: Instant, next: &mut Instant) {
+    loop {
+        let now = Instant::now();
+        if stop.load(Ordering::Acquire) || now >= *next {
+            break;
+        }
+        let hurried = shared.hurry_image.load(Ordering::Acquire);
+        let earliest = started + HURRY_INTERVAL;
+        if hurried && now >= earliest {
+            break;
+        }
+        let until = if hurried { earliest.min(*next) } else { *next };
+        std::thread::park_timeout(until - now);
+    }
+    shared.hurry_image.store(false, Ordering::Release);
+    let now = Instant::now();
+    if *next < now {
+        *next = now;
+    }
 }
 
 /// The vessels of the frame inside the image, with their ids (`ids`, in
@@ -421,6 +449,7 @@ mod tests {
             haptic_priority: AtomicU8::new(0),
             imaging_rate: std::sync::atomic::AtomicU64::new(0),
             image_frame: std::sync::atomic::AtomicU64::new(0),
+            hurry_image: AtomicBool::new(false),
             fault: Mutex::new(None),
         });
         // An image of no rows: the scenario loader refuses it, so it is set

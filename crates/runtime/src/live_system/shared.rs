@@ -100,6 +100,10 @@ pub(super) struct Shared {
     /// [`ImageSlot::frame`] of the latest frame, stored once the slot holds
     /// it: read without the slot's lock by a front end polling for frames.
     pub image_frame: AtomicU64,
+    /// A front end wants the next frame as soon as it can be rendered
+    /// ([`crate::live::LiveControl::hurry_image`]); cleared by the imaging
+    /// thread when it starts one.
+    pub hurry_image: std::sync::atomic::AtomicBool,
     /// The last error of a thread of the live system, for the page; cleared
     /// when a new session starts.
     pub fault: Mutex<Option<String>>,
