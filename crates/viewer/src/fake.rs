@@ -54,6 +54,9 @@ pub struct FakeLive {
     /// When set, frames of this size `(width, height)` of fresh noise
     /// ([`FakeLive::speckled_images`]).
     speckle: Mutex<Option<(u32, u32)>>,
+    /// When set, every frame shows the physics state of this simulated time
+    /// (s) ([`FakeLive::image_time`]).
+    image_time: Mutex<Option<f64>>,
 }
 
 /// How long a held mode change waits for its release before giving up.
@@ -77,6 +80,15 @@ impl FakeLive {
     /// connection's byte budget, as the live system's do.
     pub fn speckled_images(&self, width: u32, height: u32) {
         *self.speckle.lock().unwrap() = Some((width, height));
+    }
+
+    /// Makes every later frame show the physics state of time `time` (s):
+    /// older than the states sent once they pass it, or newer than any
+    /// (`f64::MAX`). Without it a frame's time counts the frames read, a
+    /// clock unrelated to the states' (which count each connection's
+    /// snapshots).
+    pub fn image_time(&self, time: f64) {
+        *self.image_time.lock().unwrap() = Some(time);
     }
 
     /// Attaches a device that drives the probe (the page's probe commands
@@ -243,7 +255,11 @@ impl LiveControl for FakeLive {
             width: size.0,
             height: size.1,
             frame: i.frame,
-            time: 0.01 * i.frame as f64,
+            time: self
+                .image_time
+                .lock()
+                .unwrap()
+                .unwrap_or(0.01 * i.frame as f64),
         }
     }
 

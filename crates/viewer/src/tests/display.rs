@@ -7,6 +7,7 @@
 use super::super::fake::FakeLive;
 use super::super::fake_doppler::DISC_CODE;
 use super::super::protocol::{FrameHeader, FrameKind};
+use super::doppler::next_frame;
 use super::server::{connect, decode_jpeg, decode_png, next, next_error, send, start, Client};
 use std::sync::Arc;
 use tokio_tungstenite::tungstenite::Message;
@@ -74,7 +75,7 @@ async fn the_overlay_is_reduced_with_its_codes_intact() {
     fake.speckled_images(128, 96);
     let mut ws = connect(start(fake).await).await;
     send(&mut ws, r#"{"type":"doppler_mode","mode":"color"}"#).await;
-    let first = frame_of_kind(&mut ws, FrameKind::ImageJpegFlow).await;
+    let first = next_frame(&mut ws, &[FrameKind::ImageJpegFlow]).await;
     let (h, _) = FrameHeader::parse(&first).unwrap();
     let (bw, bh) = (h.a / 2, h.b / 2);
     send(
@@ -107,17 +108,6 @@ async fn the_overlay_is_reduced_with_its_codes_intact() {
     assert!(inside > 0 && outside > 0);
 }
 
-async fn frame_of_kind(ws: &mut Client, kind: FrameKind) -> Vec<u8> {
-    for _ in 0..1000 {
-        if let Message::Binary(b) = next(ws).await {
-            if FrameHeader::parse(&b).is_some_and(|(h, _)| h.kind == kind) {
-                return b.to_vec();
-            }
-        }
-    }
-    panic!("no {kind:?} frame in 1000 messages");
-}
-
 /// A box out of 16..=8192 device pixels, or not a whole number, is refused
 /// naming the field; the connection stays up and keeps its frames.
 #[tokio::test]
@@ -141,5 +131,5 @@ async fn a_box_out_of_range_is_refused_naming_the_field() {
     .await;
     let e = next_error(&mut ws).await;
     assert!(e.contains("image_size"), "{e}");
-    frame_of_kind(&mut ws, FrameKind::ImageJpeg).await;
+    next_frame(&mut ws, &[FrameKind::ImageJpeg]).await;
 }

@@ -118,7 +118,7 @@ async fn doppler_commands_reach_the_runtime_and_the_state_reports_them() {
 }
 
 /// The next binary frame of `kind` (acknowledging states and images).
-async fn next_frame(ws: &mut super::server::Client, kinds: &[FrameKind]) -> Vec<u8> {
+pub(super) async fn next_frame(ws: &mut super::server::Client, kinds: &[FrameKind]) -> Vec<u8> {
     for _ in 0..500 {
         if let Message::Binary(b) = next(ws).await {
             if FrameHeader::parse(&b).is_some_and(|(h, _)| kinds.contains(&h.kind)) {

@@ -59,6 +59,8 @@ async fn images_over(ws: &mut Client, span: Duration, press: Option<Duration>) -
 #[tokio::test]
 async fn a_still_probe_gets_few_frames_and_a_pressing_one_many() {
     let fake = Arc::new(FakeLive::new());
+    // Frames as new as any state: none is too old to answer a press.
+    fake.image_time(f64::MAX);
     let mut ws = connect(start(fake).await).await;
     send(
         &mut ws,
@@ -99,6 +101,8 @@ async fn a_still_probe_gets_few_frames_and_a_pressing_one_many() {
 #[tokio::test]
 async fn the_frames_answering_a_press_draw_on_the_reserve() {
     let fake = Arc::new(FakeLive::new());
+    // Frames as new as any state: none is too old to answer a press.
+    fake.image_time(f64::MAX);
     fake.speckled_images(200, 200);
     let mut ws = connect(start(fake).await).await;
     send(&mut ws, r#"{"type":"doppler_mode","mode":"color"}"#).await;
@@ -121,5 +125,42 @@ async fn the_frames_answering_a_press_draw_on_the_reserve() {
     assert!(
         answering >= others + 4,
         "{answering} frames answering three presses, {others} in three other windows"
+    );
+}
+
+/// A frame of a physics state older than the newest the connection had
+/// when the page's probe command came cannot show its effect: none is sent
+/// in the command's answer window (`RESPONSE_WINDOW`, 0.3 s; one may have
+/// been on its way already), and the
+/// frames resume after it (every frame here is that old: the double's
+/// imaging is frozen at t = 0 while its states advance).
+#[tokio::test]
+async fn frames_older_than_the_command_are_not_sent_in_its_answer() {
+    let fake = Arc::new(FakeLive::new());
+    fake.image_time(0.0);
+    let mut ws = connect(start(fake).await).await;
+    // Colour mode: every frame is due (none held back as a still one).
+    send(&mut ws, r#"{"type":"doppler_mode","mode":"color"}"#).await;
+    // States pass t = 0 (the double's advance 10 ms a snapshot); frames flow.
+    assert!(images_over(&mut ws, Duration::from_millis(500), None).await >= 1);
+    send(
+        &mut ws,
+        r#"{"type":"probe","theta":0,"z":0,"depth":0.006,"tilt":0}"#,
+    )
+    .await;
+    // One frame may have been on its way when the command came; without
+    // the skip, every poll (5 ms) would send one as soon as acknowledged
+    // (measured: 25 in this window; 2 in B-mode, where the still frames go
+    // at 5 a second).
+    let within = images_over(&mut ws, Duration::from_millis(250), None).await;
+    assert!(
+        within <= 1,
+        "{within} frames older than the command sent in its answer window"
+    );
+    tokio::time::sleep(Duration::from_millis(100)).await;
+    let after = images_over(&mut ws, Duration::from_millis(500), None).await;
+    assert!(
+        after >= 1,
+        "the frames did not resume after the answer window"
     );
 }
