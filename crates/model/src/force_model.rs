@@ -233,7 +233,9 @@ impl ForceModel for SumForce<'_> {
             .min(self.second.max_step_fraction(x, dx))
     }
 
-    /// True only if both models can (`out` then holds both products).
+    /// True only if both models can (`out` then holds both products); on
+    /// false `out` may hold the first model's part: the caller discards it
+    /// (as [`crate::ThighModel::solve_stiffness_with_product`] does).
     fn add_jacobian_product(
         &mut self,
         x: &[Vec3],
