@@ -14,6 +14,7 @@ use echothigh_devices_hw::{
 };
 use nalgebra::{Isometry3, Point3};
 use std::sync::atomic::AtomicBool;
+use std::sync::mpsc;
 use std::time::Duration;
 
 fn emulator() -> Emu {
@@ -64,6 +65,51 @@ fn device_point(lm: &Landmark, off: Vec3) -> Vec3 {
     (truth().inverse() * Point3::from(lm.leg + off)).coords
 }
 
+/// What the person calibrating does when told something.
+enum Act {
+    /// Carry the stylus to this point and press the button; with `drift`,
+    /// move this far (m, device frame) while holding.
+    TouchAt { point: Vec3, drift: Option<Vec3> },
+    /// Release, carry the stylus back to this point, press again.
+    Again { point: Vec3 },
+    /// Release the button.
+    Release,
+}
+
+/// Runs `capture` while a person's hand acts on its events in a thread of
+/// its own, as a hand does: the capture keeps exchanging with the servo
+/// (and sees each release and press) while the hand moves. A hand driven
+/// from inside the event callback would stall the capture, which then sees
+/// only the states the servo published last and can miss a release.
+fn with_hand<T>(emu: &Emu, capture: impl FnOnce(&mpsc::Sender<Act>) -> T) -> T {
+    let (tx, rx) = mpsc::channel::<Act>();
+    std::thread::scope(|s| {
+        s.spawn(move || {
+            for act in rx {
+                match act {
+                    Act::TouchAt { point, drift } => {
+                        carry(emu, point);
+                        emu.set_buttons(CLUTCH);
+                        if let Some(d) = drift {
+                            let p = point + d;
+                            emu.set_hand(Some([p.x * 1e3, p.y * 1e3, p.z * 1e3]), 200.0, 5.0);
+                        }
+                    }
+                    Act::Again { point } => {
+                        emu.set_buttons(0);
+                        carry(emu, point);
+                        emu.set_buttons(CLUTCH);
+                    }
+                    Act::Release => emu.set_buttons(0),
+                }
+            }
+        });
+        let out = capture(&tx);
+        drop(tx);
+        out
+    })
+}
+
 #[test]
 fn touching_four_landmarks_recovers_the_placement() {
     let _g = serial();
@@ -71,9 +117,8 @@ fn touching_four_landmarks_recovers_the_placement() {
     let mut dev = open_hardware(DeviceKind::Openhaptics, &HardwareConfig::default()).unwrap();
     let lms = landmarks();
     let stop = AtomicBool::new(false);
-    let mut moved_once = false;
     let mut moved_events = 0;
-    let (points, fit) =
+    let (points, fit) = with_hand(&emu, |hand| {
         capture_landmarks(
             &mut dev,
             &lms,
@@ -83,28 +128,23 @@ fn touching_four_landmarks_recovers_the_placement() {
                 CaptureEvent::Touch {
                     landmark, index, ..
                 } => {
-                    carry(&emu, device_point(landmark, Vec3::zeros()));
-                    if index == 2 && !moved_once {
-                        // Press, then drift 10 mm during the 0.3 s hold.
-                        moved_once = true;
-                        emu.set_buttons(CLUTCH);
-                        let p = device_point(landmark, Vec3::new(0.0, 0.0, 0.01));
-                        emu.set_hand(Some([p.x * 1e3, p.y * 1e3, p.z * 1e3]), 200.0, 5.0);
-                    } else {
-                        emu.set_buttons(CLUTCH);
-                    }
+                    // The second landmark: press, then drift 10 mm during
+                    // the 0.3 s hold.
+                    let drift = (index == 2).then(|| Vec3::new(0.0, 0.0, 0.01));
+                    let point = device_point(landmark, Vec3::zeros());
+                    hand.send(Act::TouchAt { point, drift }).unwrap();
                 }
                 CaptureEvent::Moved { landmark, motion } => {
                     moved_events += 1;
                     assert!(motion > 0.002, "{motion}");
-                    emu.set_buttons(0);
-                    carry(&emu, device_point(landmark, Vec3::zeros()));
-                    emu.set_buttons(CLUTCH);
+                    let point = device_point(landmark, Vec3::zeros());
+                    hand.send(Act::Again { point }).unwrap();
                 }
-                CaptureEvent::Captured { .. } => emu.set_buttons(0),
+                CaptureEvent::Captured { .. } => hand.send(Act::Release).unwrap(),
             },
         )
-        .unwrap();
+    })
+    .unwrap();
     assert_eq!(moved_events, 1, "the drifting hold was asked again");
     assert_eq!(points.len(), 4);
     // The arm rests within 1e-9 m of each target; the servo's 1 ms
@@ -128,28 +168,30 @@ fn a_landmark_touched_off_its_place_is_named() {
     let mut dev = open_hardware(DeviceKind::Openhaptics, &HardwareConfig::default()).unwrap();
     let lms = landmarks();
     let stop = AtomicBool::new(false);
-    let err = capture_landmarks(
-        &mut dev,
-        &lms,
-        &CaptureConfig::default(),
-        &stop,
-        |ev| match ev {
-            CaptureEvent::Touch {
-                landmark, index, ..
-            } => {
-                // The lateral landmark touched 20 mm too far forward.
-                let off = if index == 4 {
-                    Vec3::new(0.0, 0.02, 0.0)
-                } else {
-                    Vec3::zeros()
-                };
-                carry(&emu, device_point(landmark, off));
-                emu.set_buttons(CLUTCH);
-            }
-            CaptureEvent::Captured { .. } => emu.set_buttons(0),
-            CaptureEvent::Moved { .. } => panic!("the hand was still"),
-        },
-    )
+    let err = with_hand(&emu, |hand| {
+        capture_landmarks(
+            &mut dev,
+            &lms,
+            &CaptureConfig::default(),
+            &stop,
+            |ev| match ev {
+                CaptureEvent::Touch {
+                    landmark, index, ..
+                } => {
+                    // The lateral landmark touched 20 mm too far forward.
+                    let off = if index == 4 {
+                        Vec3::new(0.0, 0.02, 0.0)
+                    } else {
+                        Vec3::zeros()
+                    };
+                    let point = device_point(landmark, off);
+                    hand.send(Act::TouchAt { point, drift: None }).unwrap();
+                }
+                CaptureEvent::Captured { .. } => hand.send(Act::Release).unwrap(),
+                CaptureEvent::Moved { .. } => panic!("the hand was still"),
+            },
+        )
+    })
     .unwrap_err();
     match &err {
         // Four points, one 20 mm off: the rigid fit spreads it, leaving
