@@ -37,11 +37,20 @@ function check(name, ok, detail = '') {
 
 /** Waits until `fn()` (run in the page) is truthy; returns its value. */
 async function until(page, fn, arg, what, timeout = 20000) {
-  try {
-    const handle = await page.waitForFunction(fn, arg, { timeout, polling: 50 });
-    return await handle.jsonValue();
-  } catch (e) {
-    throw new Error(`timed out waiting for ${what}`);
+  // Polled from here, so that `fn` may be async (the image's pixels are
+  // read in its worker): `waitForFunction` takes a returned promise for a
+  // truthy value at once.
+  const end = Date.now() + timeout;
+  for (;;) {
+    let v;
+    try {
+      v = await page.evaluate(fn, arg);
+    } catch (e) {
+      throw new Error(`timed out waiting for ${what} (${e.message})`);
+    }
+    if (v) return v;
+    if (Date.now() > end) throw new Error(`timed out waiting for ${what}`);
+    await new Promise((r) => setTimeout(r, 50));
   }
 }
 
@@ -52,18 +61,25 @@ const forceOf = () => {
 };
 
 /** Fraction of the canvas's pixels that differ from its background, and distinct colours. */
-const canvasInk = (id) => {
+const canvasInk = async (id) => {
   // The 3D view drawn in a worker (issue 19) reads its own pixels back in
   // the task that draws them.
   if (id === 'scene' && window.echothigh.scene && window.echothigh.scene.ink) return window.echothigh.scene.ink();
   // The 3D view does not preserve its drawing buffer: draw it in this task.
   if (id === 'scene' && window.echothigh.scene) window.echothigh.scene.render();
-  const src = document.getElementById(id);
-  const c = document.createElement('canvas');
-  c.width = src.width; c.height = src.height;
-  const ctx = c.getContext('2d');
-  ctx.drawImage(src, 0, 0);
-  const d = ctx.getImageData(0, 0, c.width, c.height).data;
+  // The image is drawn in a worker (issue 19): its pixels as drawn there.
+  let c, d;
+  if (id === 'echo') {
+    ({ width: c, data: d } = await window.echothigh.echoPixels());
+    c = { width: c, height: d.length / 4 / c };
+  } else {
+    const src = document.getElementById(id);
+    c = document.createElement('canvas');
+    c.width = src.width; c.height = src.height;
+    const ctx = c.getContext('2d');
+    ctx.drawImage(src, 0, 0);
+    d = ctx.getImageData(0, 0, c.width, c.height).data;
+  }
   const bg = [d[0], d[1], d[2]];
   let ink = 0;
   const colours = new Set();
@@ -295,9 +311,8 @@ try {
   check('3D canvas draws non-blank pixels', scene.fraction > 0.03 && scene.colours > 20,
     `${(scene.fraction * 100).toFixed(1)} % inked, ${scene.colours} colours, ${scene.width}×${scene.height}`);
   const echo = await page.evaluate(canvasInk, 'echo');
-  const echoStats = await page.evaluate(() => {
-    const c = document.getElementById('echo');
-    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+  const echoStats = await page.evaluate(async () => {
+    const { data: d } = await window.echothigh.echoPixels();
     let sum = 0, sq = 0, n = d.length / 4;
     for (let i = 0; i < d.length; i += 4) { sum += d[i]; sq += d[i] * d[i]; }
     return { mean: sum / n, std: Math.sqrt(Math.max(sq / n - (sum / n) ** 2, 0)) };
@@ -309,12 +324,12 @@ try {
   // whole centimetre at the right edge: at row 10·k mm × rows / depth, the
   // tick's 8 px (drawn #d8d8d8, gray 216) are light. A light speckle pixel
   // could pass one, so all of them in every tick must be.
-  const scale = await page.evaluate(() => {
+  const scale = await page.evaluate(async () => {
     const sec = window.echothigh.state && window.echothigh.state.section;
     const hello = window.echothigh.hello;
     const depth = sec && sec.image_depth > 0 ? sec.image_depth : hello && hello.image ? hello.image.depth : 0;
-    const c = document.getElementById('echo');
-    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+    const { width, height, data: d } = await window.echothigh.echoPixels();
+    const c = { width, height };
     const ticks = [];
     for (let cm = 1; cm * 10 < depth * 1000 - 0.5; cm++) {
       const y = Math.round(cm * 10 * c.height / (depth * 1000));
@@ -398,9 +413,9 @@ try {
   });
   await page.click('input[name="dmode"][value="color"]');
   const colourAt = await page.evaluate(() => ({ bytes: window.echothigh.bytes, t: performance.now() }));
-  const saturated = () => {
-    const c = document.getElementById('echo');
-    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+  const saturated = async () => {
+    const { width, height, data: d } = await window.echothigh.echoPixels();
+    const c = { width, height };
     let n = 0;
     for (let i = 0; i < d.length; i += 4) {
       if (Math.max(d[i], d[i + 1], d[i + 2]) - Math.min(d[i], d[i + 1], d[i + 2]) >= 60) n++;
@@ -409,10 +424,24 @@ try {
   };
   const coloured = await until(page, saturated, null, 'coloured pixels in the image (colour mode)');
   await page.waitForTimeout(2500);
-  const colourRate = await page.evaluate((a) => (window.echothigh.bytes - a.bytes) / ((performance.now() - a.t) / 1000), colourAt);
+  const colour = await page.evaluate((a) => {
+    const span = (performance.now() - a.t) / 1000;
+    return { rate: (window.echothigh.bytes - a.bytes) / span, span, largest: window.echothigh.largestFrame };
+  }, colourAt);
+  const colourRate = colour.rate;
   await page.screenshot({ path: join(shots, '02b-colour.png') });
   check('colour mode colours the image', coloured > 0, `${coloured} coloured pixels; ${(colourRate / 1000).toFixed(0)} KB/s with colour on`);
-  check('bytes per second with colour on within the 400 KB/s budget', colourRate <= 400_000, `${(colourRate / 1000).toFixed(0)} KB/s`);
+  // The wire's budget over a span of T s (frames.rs, image_pace.rs): at
+  // most 360 KB/s · T, the bucket's burst (120 KB), the reserve of the
+  // frames answering a probe command (80 KB, one was sent here) and one
+  // message (the largest this page received), plus the states sent while
+  // the balance is below zero (~0.7 KB at 40 Hz, 28 KB/s at most). Over the
+  // lag measurement's ~35 s that is under 400 KB/s (asserted there); over
+  // these few seconds the burst weighs more. A backlog, as in issue 19
+  // (2.4 MB/s a tab), exceeds it many times.
+  const colourBound = 360_000 + 28_000 + (120_000 + 80_000 + colour.largest) / colour.span;
+  check('bytes per second with colour on within the budget over its span', colourRate <= colourBound,
+    `${(colourRate / 1000).toFixed(0)} KB/s over ${colour.span.toFixed(1)} s (bound ${(colourBound / 1000).toFixed(0)} KB/s, largest message ${(colour.largest / 1000).toFixed(1)} KB)`);
   await page.click('input[name="dmode"][value="spectral"]');
   const trace = await until(page, () => {
     const d = window.echothigh.doppler;
@@ -462,9 +491,9 @@ try {
       return l && l.length ? { labels: l, depth: sec.image_depth, width: window.echothigh.hello.image.width } : null;
     }, null, 'a labelled vessel', 4000).catch(() => null);
   }
-  const hinted = labelled && await until(page, () => {
-    const c = document.getElementById('echo');
-    const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
+  const hinted = labelled && await until(page, async () => {
+    const { width, height, data: d } = await window.echothigh.echoPixels();
+    const c = { width, height };
     const near = (i, [r, g, b]) => Math.abs(d[i] - r) < 40 && Math.abs(d[i + 1] - g) < 40 && Math.abs(d[i + 2] - b) < 40;
     let n = 0;
     for (let i = 0; i < d.length; i += 4) if (near(i, [0x6b, 0xb6, 0xff]) || near(i, [0xff, 0x6b, 0x6b])) n++;
@@ -695,8 +724,7 @@ try {
   // These bounds hold only while the simulation keeps its
   // rate: when the machine starves the physics or the imaging (the page
   // then says "falling behind"), the lag is the simulation's, not the
-  // wire's, and is reported instead of asserted. The absolute 150 ms target
-  // is asserted when, in addition, the page draws at 20 frames/s or more.
+  // wire's, and is reported instead of asserted (as the 150 ms target below).
   const keepsUp = lag.physics_rate >= 0.8 * lag.physics_rate_setting;
   const bound = 150 + 2 * lag.frame_p95;
   // What is asserted: no backlog. Every one of the 50 commands showed its
@@ -705,17 +733,29 @@ try {
   // at most MAX_STALE_IMAGES stale images (derived above).
   check(`every command reaches the state within 3 s of simulated time and the image after at most ${MAX_STALE_IMAGES} stale images (no backlog)`, lag.missed === 0,
     `${lag.missed} of ${lag.commands} missed: ${JSON.stringify(lag.misses)}`);
-  // Reported, not asserted: the frame-interval bounds above are not yet
-  // derived well enough to hold (on an idle machine the state's p95 was
-  // 538 ms against 150 + 2 × 183 ms = 517 ms; the physics' own response to
-  // a command is not in the bound), and the 150 ms target of issue 19 is
-  // not met on this machine. The numbers go to viewer-lag.json and the
-  // issue's note.
+  // Issue 19's target, asserted while the simulation keeps its rates: a
+  // command shows in the state and in the image within 150 ms at p95, in
+  // this page throttled ×THROTTLE. The image reaches the screen without the
+  // page's thread: a worker draws it from its own socket (echo_worker.js;
+  // its drawing time is the one measured). When the machine starves the
+  // physics (below 80 % of its rate) or the imaging (below 80 % of its 20
+  // frames/s), the page says "falling behind" and the lag is the
+  // simulation's: reported, not asserted. The frame-interval bounds of the
+  // comments above are reported beside it.
+  const imageSocket = await page.evaluate(() => window.echothigh.imageSocket === true);
+  check('the image comes on its own socket, drawn off the page\'s thread', imageSocket);
+  const imagingKeepsUp = (lag.imaging_rate.p50 ?? 0) >= 0.8 * 20;
   const imageBound = 150 + 50 + 3 * lag.image_interval_p95;
-  console.log(`info lag bounds (not asserted): state p95 ${ms(lag.state.p95)} vs ${ms(bound)}; ` +
-    `image p95 ${ms(lag.image.p95)} vs ${ms(imageBound)} (image interval p95 ${ms(lag.image_interval_p95)}); ` +
-    `physics ${lag.physics_rate.toFixed(0)} Hz of ${lag.physics_rate_setting.toFixed(0)}` +
-    (keepsUp ? '' : ' (starved: the page showed "falling behind")'));
+  const lagFigures = `state p95 ${ms(lag.state.p95)} (frame bound ${ms(bound)}), image p95 ${ms(lag.image.p95)} ` +
+    `(frame bound ${ms(imageBound)}, image interval p95 ${ms(lag.image_interval_p95)}); ` +
+    `physics ${lag.physics_rate.toFixed(0)} Hz of ${lag.physics_rate_setting.toFixed(0)}, ` +
+    `imaging p50 ${(lag.imaging_rate.p50 ?? 0).toFixed(1)} frames/s of 20`;
+  if (keepsUp && imagingKeepsUp) {
+    check('a command shows in the state and the image within 150 ms at p95 (issue 19)',
+      lag.state.p95 < 150 && lag.image.p95 < 150, lagFigures);
+  } else {
+    console.log(`info lag not asserted (the machine starves the simulation): ${lagFigures}`);
+  }
   await page.screenshot({ path: join(shots, '04-1280x800.png') });
   check('no errors in the page console', consoleErrors.length === 0, consoleErrors.join(' | '));
 

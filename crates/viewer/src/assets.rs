@@ -49,6 +49,16 @@ pub const ASSETS: &[Asset] = &[
         body: include_bytes!("../assets/web/scene_worker.js"),
     },
     Asset {
+        path: "/echo_worker.js",
+        content_type: JS,
+        body: include_bytes!("../assets/web/echo_worker.js"),
+    },
+    Asset {
+        path: "/image_stream.js",
+        content_type: JS,
+        body: include_bytes!("../assets/web/image_stream.js"),
+    },
+    Asset {
         path: "/panels.js",
         content_type: JS,
         body: include_bytes!("../assets/web/panels.js"),

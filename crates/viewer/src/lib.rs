@@ -18,6 +18,7 @@ mod fake_doppler;
 mod flow_frames;
 mod frames;
 mod idle;
+mod image_link;
 mod image_pace;
 pub mod protocol;
 mod records_pages;

@@ -10,6 +10,11 @@
 //!   width × height, row-major, axial rows) and [`FrameKind::Surface`] (`a` =
 //!   node count; `3a` f32 positions in m, then `a` f32 compressions in 0..1).
 //!
+//! The image frames go on a second socket, `/ws/image?token=T`, once the
+//! page's worker opens it with the token of its hello
+//! ([`crate::image_link`]); it carries only image frames one way and
+//! `image_ack` the other.
+//!
 //! Page → server: text frames holding one JSON object, either a
 //! [`LiveCommand`] (forwarded to the runtime) or a [`ViewerCommand`] (exam
 //! mode, handled by the server). [`decode_client`] refuses anything else —
@@ -71,6 +76,11 @@ pub enum ServerMessage {
         /// The image's field of view (m), for the depth scale drawn on it.
         #[serde(default)]
         image: echothigh_runtime::live::ImageGeometry,
+        /// The token (hex) with which the page's worker may open the image
+        /// socket, `/ws/image?token=…` ([`crate::image_link`]): the images
+        /// then go there.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        image_link: Option<String>,
     },
     /// Latest live state (the surface geometry follows as a binary frame).
     State(ViewState),

@@ -14,13 +14,14 @@ use super::assets;
 use super::display_fit::DisplayFit;
 use super::exam::ExamSession;
 use super::frames::{ByteBudget, WireState, BURST_BYTES, BYTES_PER_SECOND};
+use super::image_link::{ImageLinks, LinkEvent};
 use super::image_pace::ImagePace;
 use super::protocol::{
-    decode_client, ClientMessage, Envelope, ServerMessage, ViewState, ViewerCommand, CREDIT,
-    PROTOCOL_VERSION,
+    decode_client, ClientMessage, Envelope, FrameHeader, FrameKind, ServerMessage, ViewState,
+    ViewerCommand, CREDIT, PROTOCOL_VERSION,
 };
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
-use axum::extract::State;
+use axum::extract::{Query, State};
 use axum::http::{header, HeaderMap, StatusCode, Uri};
 use axum::response::{IntoResponse, Response};
 use axum::routing::get;
@@ -71,6 +72,8 @@ pub struct AppState {
     /// Whether the live leg is an exam case's (loaded by `exam_start`), to
     /// be replaced by the home case's when the trainee leaves the exam.
     exam_leg: std::sync::atomic::AtomicBool,
+    /// The image sockets offered to the connections' workers.
+    image_links: ImageLinks,
 }
 
 impl AppState {
@@ -97,6 +100,7 @@ impl AppState {
             owner: Mutex::new((None, 0)),
             mesh_epoch: std::sync::atomic::AtomicU64::new(0),
             exam_leg: std::sync::atomic::AtomicBool::new(exam_leg),
+            image_links: ImageLinks::default(),
         }
     }
 
@@ -255,6 +259,7 @@ impl AppState {
 pub fn router(state: Arc<AppState>) -> Router {
     Router::new()
         .route("/ws", get(ws_upgrade))
+        .route("/ws/image", get(image_upgrade))
         .route("/records", get(instructor_page))
         .route("/records/{name}", get(trainee_page))
         .fallback(get(serve_asset))
@@ -425,6 +430,36 @@ async fn ws_upgrade(
         .on_upgrade(move |socket| session(socket, app))
 }
 
+/// The image socket of a connection's worker ([`super::image_link`]):
+/// `?token=` the hex token of that connection's `hello`; refused (404)
+/// when no open connection offers it, and with the checks of `/ws`.
+async fn image_upgrade(
+    ws: WebSocketUpgrade,
+    headers: HeaderMap,
+    Query(query): Query<std::collections::HashMap<String, String>>,
+    State(app): State<Arc<AppState>>,
+) -> Response {
+    if let Some(r) = host_refused(&app, &headers) {
+        return r;
+    }
+    if !same_origin(&headers) {
+        return (StatusCode::FORBIDDEN, "cross-origin WebSocket refused").into_response();
+    }
+    let token = query
+        .get("token")
+        .and_then(|t| u64::from_str_radix(t, 16).ok());
+    let Some(token) = token.filter(|&t| app.image_links.offered(t)) else {
+        return (
+            StatusCode::NOT_FOUND,
+            "no open connection offers this image token (token: the hex `image_link` of its hello)",
+        )
+            .into_response();
+    };
+    let ping = app.config.idle_timeout / 3;
+    ws.max_message_size(4 * 1024)
+        .on_upgrade(move |socket| async move { app.image_links.serve(socket, token, ping).await })
+}
+
 /// Serialises a server message (serialising these types cannot fail).
 fn json(body: ServerMessage) -> Message {
     let text = serde_json::to_string(&Envelope::new(body)).unwrap_or_else(|e| {
@@ -486,6 +521,8 @@ struct Conn {
     exam_rev: Option<u64>,
     /// [`AppState::mesh_epoch`] of the mesh this connection sent.
     mesh_epoch: u64,
+    /// The token of this connection's image link, as its hello says it.
+    image_link: Option<String>,
 }
 
 impl Conn {
@@ -510,6 +547,7 @@ impl Conn {
             lines: Default::default(),
             exam_rev: None,
             mesh_epoch: 0,
+            image_link: None,
         }
     }
 }
@@ -570,12 +608,15 @@ async fn handle_text(app: &Arc<AppState>, conn: &mut Conn, text: &str) -> Vec<Me
 /// One connection: hello, then state pushes and commands until it closes.
 async fn session(mut socket: WebSocket, app: Arc<AppState>) {
     let watch = PageWatch::new(app.clone());
+    let mut link = app.image_links.offer();
     let hello = ServerMessage::Hello {
         mesh: app.control.mesh(),
         state_rate: app.config.state_rate,
         image: app.control.image_geometry(),
+        image_link: Some(format!("{:x}", link.token)),
     };
     if socket.send(json(hello)).await.is_err() {
+        link.close(&app.image_links);
         return;
     }
     let period = Duration::from_secs_f64(1.0 / app.config.state_rate.clamp(1.0, 120.0));
@@ -589,6 +630,7 @@ async fn session(mut socket: WebSocket, app: Arc<AppState>) {
     let mut ping = tokio::time::interval(app.config.idle_timeout / 3);
     ping.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     let mut conn = Conn::new(watch.1);
+    conn.image_link = Some(format!("{:x}", link.token));
     loop {
         let outgoing: Vec<Message> = tokio::select! {
             incoming = socket.recv() => match incoming {
@@ -602,12 +644,43 @@ async fn session(mut socket: WebSocket, app: Arc<AppState>) {
             _ = tick.tick() => push(&app, &mut conn),
             _ = image_poll.tick() => poll_image(&app, &mut conn),
             _ = ping.tick() => vec![Message::Ping(Default::default())],
+            event = link.event() => {
+                // An acknowledgement on the worker's socket, or the worker
+                // gone (its image will never be acknowledged): the next
+                // image may go.
+                if event != LinkEvent::Attached {
+                    conn.image_pending = false;
+                }
+                Vec::new()
+            }
         };
         for m in outgoing {
+            // Images go to the page's worker when it has its socket.
+            let m = if is_image(&m) {
+                match link.send(m) {
+                    Ok(()) => continue,
+                    Err(m) => m,
+                }
+            } else {
+                m
+            };
             if socket.send(m).await.is_err() {
+                link.close(&app.image_links);
                 return;
             }
         }
+    }
+    link.close(&app.image_links);
+}
+
+/// Whether `m` is an image frame (of the kinds [`push_image`] sends).
+fn is_image(m: &Message) -> bool {
+    match m {
+        Message::Binary(b) => matches!(
+            FrameHeader::parse(b),
+            Some((h, _)) if matches!(h.kind, FrameKind::ImageJpeg | FrameKind::ImageJpegFlow)
+        ),
+        _ => false,
     }
 }
 
@@ -654,6 +727,7 @@ fn push(app: &AppState, conn: &mut Conn) -> Vec<Message> {
             mesh: app.control.mesh(),
             state_rate: app.config.state_rate,
             image: app.control.image_geometry(),
+            image_link: conn.image_link.clone(),
         });
         conn.budget.spend(hello.to_text().map_or(0, str::len));
         out.push(hello);

@@ -5,6 +5,7 @@
 import { ThighScene } from './scene.js';
 import { SceneProxy, workerDrawingAvailable } from './scene_proxy.js';
 import { EchoView, ForcePlot, Gauge, IMAGING_RATE, drawDepthScale, drawVesselNames, norm, showStatus } from './panels.js';
+import { FRAME_IMAGE_JPEG, FRAME_IMAGE_JPEG_FLOW, ImageStream, drawGate } from './image_stream.js';
 import { showExam } from './exam.js';
 import { deviceDrives, showDevice } from './device.js';
 import { Guide } from './guide.js';
@@ -13,9 +14,7 @@ import { setupDoppler } from './doppler.js';
 const PROTOCOL_VERSION = 2;
 const FRAME_IMAGE = 1;
 const FRAME_SURFACE = 2;
-const FRAME_IMAGE_JPEG = 3; // f64 time, then a gray JPEG
 const FRAME_SURFACE_DELTA = 5; // a changed of b nodes: u32 indices, 3a f32 positions, a f32 compressions
-const FRAME_IMAGE_JPEG_FLOW = 6; // as 3, with u32 length L before the JPEG, then the colour overlay's PNG
 const FRAME_SPECTRAL = 8; // a lines of b rows: u64 first, f64 time, f64 interval, then a·b bytes
 const DEPTH_STEP = 0.0005; // m per wheel notch or key press
 const MAX_DEPTH = 0.035; // m, below the server's limit
@@ -27,7 +26,7 @@ const $ = (id) => document.getElementById(id);
 // What the page knows, readable by tests and the console.
 const live = {
   connected: false, hello: null, state: null, lastError: null, errors: 0,
-  exam: null, imageFrames: 0, surfaceFrames: 0, imageTime: null, bytes: 0,
+  exam: null, imageFrames: 0, surfaceFrames: 0, imageTime: null, bytes: 0, largestFrame: 0,
   // Called as fn(kind, performance.now(), detail) on every state ('state',
   // the message) and image ('image', its simulated time): for measurements.
   listeners: [],
@@ -58,7 +57,69 @@ try {
   sceneUnavailable(e.message);
 }
 live.scene = scene; // for the browser test and the console
-const echo = new EchoView($('echo'));
+// The image: drawn by a worker on its own socket where the browser can
+// (issue 19: off the page's thread; echo_worker.js), else here.
+let echoWorker = null;
+let echo = null; // the EchoView here, or what the page knows of the worker's
+let imageStream = null;
+const pixelRequests = new Map();
+try {
+  if (typeof Worker === 'function' && typeof OffscreenCanvas === 'function' && $('echo').transferControlToOffscreen) {
+    const off = $('echo').transferControlToOffscreen();
+    echoWorker = new Worker('./echo_worker.js', { type: 'module' });
+    echoWorker.onmessage = onEchoWorker;
+    echoWorker.postMessage({ type: 'init', canvas: off }, [off]);
+    echo = { frames: 0, coloured: 0, width: 0, height: 0 };
+  }
+} catch (e) {
+  echoWorker = null;
+}
+if (!echoWorker) {
+  echo = new EchoView($('echo'));
+  imageStream = new ImageStream(echo, {
+    ack: () => send({ type: 'image_ack' }),
+    decorate: decorateEcho,
+    palette: () => doppler.palette(),
+    shown: (s) => { stamp(live.costs.image, s.drawn - s.arrived); imageShown(s.time); },
+    failed: (message) => toast(message),
+  });
+}
+live.echo = echo;
+/** What the image worker says: an image drawn, bytes received, an acknowledgement to pass on. */
+function onEchoWorker(e) {
+  const m = e.data;
+  if (m.type === 'shown') {
+    // Its times are epoch ms: on this page's clock, the image is on screen
+    // when the worker drew it, whatever this thread was doing.
+    const drawn = m.drawn - performance.timeOrigin;
+    echo.frames += 1; echo.coloured = m.coloured; echo.width = m.width; echo.height = m.height;
+    stamp(live.costs.image, m.drawn - m.arrived);
+    imageShown(m.time, drawn);
+  } else if (m.type === 'bytes') {
+    frameBytes(m.bytes);
+  } else if (m.type === 'ack') {
+    send({ type: 'image_ack' });
+  } else if (m.type === 'open') {
+    live.imageSocket = true;
+  } else if (m.type === 'closed') {
+    live.imageSocket = false;
+  } else if (m.type === 'pixels') {
+    const done = pixelRequests.get(m.id);
+    pixelRequests.delete(m.id);
+    if (done) done({ width: m.width, height: m.height, data: m.data });
+  } else if (m.type === 'error') {
+    toast(m.message);
+  }
+}
+/** The image's pixels as drawn (RGBA), for the browser test: read where it is drawn. */
+live.echoPixels = () => {
+  if (!echoWorker) {
+    const c = $('echo');
+    return Promise.resolve({ width: c.width, height: c.height, data: c.getContext('2d').getImageData(0, 0, c.width, c.height).data });
+  }
+  const id = Math.random();
+  return new Promise((resolve) => { pixelRequests.set(id, resolve); echoWorker.postMessage({ type: 'pixels', id }); });
+};
 const plot = new ForcePlot($('plot'), 5);
 const gauge = new Gauge($('gauge-box'));
 // The technical status and settings, hidden until asked for (remembered).
@@ -82,11 +143,15 @@ function connect() {
   ws.onclose = () => { live.connected = false; setConn(false); setTimeout(connect, 1000); };
   ws.onmessage = (ev) => {
     if (typeof ev.data === 'string') { live.bytes += ev.data.length; onJson(ev.data); }
-    else { live.bytes += ev.data.byteLength; onFrame(ev.data); }
+    else { frameBytes(ev.data.byteLength); onFrame(ev.data); }
   };
 }
-function notify(kind, detail) {
-  const now = performance.now();
+/** Counts a binary frame's bytes (either socket): the total and the largest. */
+function frameBytes(n) {
+  live.bytes += n;
+  live.largestFrame = Math.max(live.largestFrame, n);
+}
+function notify(kind, detail, now = performance.now()) {
   for (const f of live.listeners) f(kind, now, detail);
 }
 function setConn(on) {
@@ -121,6 +186,11 @@ function onJson(text) {
   if (msg.type === 'hello') {
     live.hello = msg;
     if (scene) scene.setMesh(msg.mesh);
+    // The image socket of this connection, for the worker that draws it.
+    if (echoWorker && msg.image_link) {
+      const base = `${location.protocol === 'https:' ? 'wss' : 'ws'}://${location.host}`;
+      echoWorker.postMessage({ type: 'connect', url: `${base}/ws/image?token=${msg.image_link}` });
+    }
   } else if (msg.type === 'state') {
     onState(msg);
   } else if (msg.type === 'error') {
@@ -136,7 +206,9 @@ function onFrame(buf) {
   if (magic !== 'ETHV' || head.getUint8(4) !== PROTOCOL_VERSION) return;
   const kind = head.getUint8(5), a = head.getUint32(8, true), b = head.getUint32(12, true);
   if (kind === FRAME_IMAGE && buf.byteLength === 16 + a * b) {
-    showImage(a, b, new Uint8Array(buf.slice(16)), null);
+    // Raw frames (not sent by this server, kept by the protocol): drawn
+    // here when the page draws its image itself.
+    if (!echoWorker) showImage(a, b, new Uint8Array(buf.slice(16)), null);
   } else if (kind === FRAME_SURFACE && buf.byteLength === 16 + 16 * a) {
     surface.pos = new Float32Array(buf.slice(16, 16 + 12 * a));
     surface.comp = new Float32Array(buf.slice(16 + 12 * a));
@@ -157,40 +229,16 @@ function onFrame(buf) {
   } else if (kind === FRAME_SPECTRAL && buf.byteLength === 40 + a * b && b === 64) {
     const interval = new DataView(buf, 32, 8).getFloat64(0, true);
     doppler.lines(new Uint8Array(buf, 40), a, interval);
-  } else if (kind === FRAME_IMAGE_JPEG && buf.byteLength > 24 || kind === FRAME_IMAGE_JPEG_FLOW && buf.byteLength > 28) {
-    const time = new DataView(buf, 16, 8).getFloat64(0, true);
-    const flow = kind === FRAME_IMAGE_JPEG_FLOW;
-    const len = flow ? new DataView(buf, 24, 4).getUint32(0, true) : buf.byteLength - 24;
-    const at = flow ? 28 : 24;
-    const jpeg = new Blob([new Uint8Array(buf, at, len)], { type: 'image/jpeg' });
-    const codes = flow ? new Blob([new Uint8Array(buf, at + len)], { type: 'image/png' }) : null;
-    const arrived = performance.now();
-    // Flow control: one image decoding and one more on its way. The first
-    // is acknowledged on arrival, so the server renders and sends the next
-    // while this one decodes; one that arrives while another decodes is
-    // acknowledged when that one is drawn.
-    decoding += 1;
-    if (decoding === 1) send({ type: 'image_ack' }); else ackOwed = true;
-    // A B-mode frame is drawn as decoded; with the flow's codes, its
-    // pixels are read back to be coloured.
-    const shown = flow
-      ? () => Promise.all([decodeGray(jpeg, a, b), decodeGray(codes, a, b)]).then(([px, overlay]) => showImage(a, b, px, time, overlay))
-      : () => decodeBitmap(jpeg, a, b).then((bmp) => { showBitmap(bmp, time); bmp.close(); });
-    imageChain = imageChain.then(shown).then(() => {
-      stamp(live.costs.image, performance.now() - arrived);
-    }).catch((e) => toast(`image: ${e.message}`))
-      .finally(() => {
-        decoding -= 1;
-        if (ackOwed) { ackOwed = false; send({ type: 'image_ack' }); }
-      });
+  } else if (kind === FRAME_IMAGE_JPEG || kind === FRAME_IMAGE_JPEG_FLOW) {
+    // On this socket while the worker has none (its first moments, a
+    // reconnection): drawn by the worker all the same.
+    if (echoWorker) echoWorker.postMessage({ type: 'frame', buf }, [buf]);
+    else imageStream.frame(buf);
   }
 }
 
 // The surface and the image as the page holds them (the wire sends changes).
 const surface = { pos: null, comp: null };
-let imageChain = Promise.resolve();
-let decoding = 0; // images received and not yet drawn
-let ackOwed = false; // an image_ack held back while one decodes
 function showSurface() {
   if (scene) scene.updateSurface(surface.pos, surface.comp);
   live.surfaceFrames += 1;
@@ -210,52 +258,50 @@ function hintOn() {
   const e = live.state && live.state.exam;
   return $('hint').checked && !(e && e.open);
 }
+/**
+ * What is drawn over the image, from the newest state: the depth (m), the
+ * vessels' labels when the hint is on (else null), the image's width (m),
+ * the PW gate in spectral mode (else null).
+ */
+function imageDecor() {
+  const s = live.state;
+  const sec = s && s.section;
+  const d = s && s.doppler;
+  return {
+    depth: imageDepth(),
+    labels: sec && hintOn() ? sec.labels : null,
+    width: live.hello && live.hello.image ? live.hello.image.width : 0,
+    gate: d && d.mode === 'spectral' ? { x: d.gate.x, y: d.gate.y } : null,
+  };
+}
 function decorateEcho(ctx, w, h) {
-  drawDepthScale(ctx, w, h, imageDepth());
-  const sec = live.state && live.state.section;
-  if (sec && hintOn()) {
-    const width = live.hello && live.hello.image ? live.hello.image.width : 0;
-    drawVesselNames(ctx, w, h, sec.labels, width, imageDepth());
-  }
-  doppler.decorate(ctx, w, h);
+  const d = imageDecor();
+  drawDepthScale(ctx, w, h, d.depth);
+  if (d.labels) drawVesselNames(ctx, w, h, d.labels, d.width, d.depth);
+  drawGate(ctx, w, h, d.gate);
 }
-function showImage(w, h, px, time, overlay = null) {
-  echo.draw(w, h, px, overlay, doppler.palette(), decorateEcho);
+/** Sends the worker the decorations (and the overlay's palette) when they change. */
+const sentDecor = { key: '', palette: null };
+function postDecor() {
+  if (!echoWorker) return;
+  const decor = imageDecor();
+  const key = JSON.stringify(decor);
+  const palette = doppler.palette();
+  if (key === sentDecor.key && palette === sentDecor.palette) return;
+  echoWorker.postMessage({ type: 'decor', decor, palette: palette === sentDecor.palette ? null : palette });
+  sentDecor.key = key; sentDecor.palette = palette;
+}
+$('hint').addEventListener('change', postDecor);
+function showImage(w, h, px, time) {
+  echo.draw(w, h, px, null, null, decorateEcho);
   imageShown(time);
 }
-function showBitmap(bmp, time) {
-  echo.drawBitmap(bmp, decorateEcho);
-  imageShown(time);
-}
-function imageShown(time) {
+function imageShown(time, at = performance.now()) {
   live.imageFrames += 1;
   live.imageTime = time;
-  stamp(live.arrivals.image);
-  notify('image', time);
+  stamp(live.arrivals.image, at);
+  notify('image', time, at);
 }
-const grayCanvas = new OffscreenCanvas(1, 1);
-const grayCtx = grayCanvas.getContext('2d', { willReadFrequently: true });
-/** An 8-bit gray JPEG or PNG decoded as it is (no colour management), checked against its header's size. */
-async function decodeBitmap(blob, w, h) {
-  const bmp = await createImageBitmap(blob, { colorSpaceConversion: 'none', premultiplyAlpha: 'none' });
-  if (bmp.width !== w || bmp.height !== h) {
-    bmp.close();
-    throw new Error(`image of ${bmp.width}×${bmp.height}, header ${w}×${h}`);
-  }
-  return bmp;
-}
-/** The gray levels of an 8-bit gray JPEG or PNG (no colour management). */
-async function decodeGray(blob, w, h) {
-  const bmp = await decodeBitmap(blob, w, h);
-  grayCanvas.width = w; grayCanvas.height = h;
-  grayCtx.drawImage(bmp, 0, 0);
-  bmp.close();
-  const rgba = grayCtx.getImageData(0, 0, w, h).data;
-  const px = new Uint8Array(w * h);
-  for (let i = 0, j = 0; i < px.length; i++, j += 4) px[i] = rgba[j];
-  return px;
-}
-
 // ---- state ---------------------------------------------------------------
 let renderedFps = 0;
 function onState(s) {
@@ -273,6 +319,7 @@ function onState(s) {
   plot.push(s.time, rendered, physics);
   gauge.update(rendered, physics, s.max_force, s.section && s.section.target_band);
   if (scene) scene.updateState(s);
+  postDecor();
   // The panels (text the trainee reads) follow at most every PANELS_MS,
   // with the newest state: at 40 states/s their DOM updates (style,
   // layout, paint) held the page's thread from the next state (issue 19).

@@ -209,15 +209,6 @@ export function setupDoppler($, send) {
   };
   /** The palette of the overlay in the current mode. */
   d.palette = () => PALETTES[d.status && d.status.mode === 'power' ? 'power' : 'color'];
-  /** Draws the gate on the image (spectral mode). */
-  d.decorate = (ctx, w, h) => {
-    const s = d.status;
-    if (!s || s.mode !== 'spectral') return;
-    const x = s.gate.x * w, y = s.gate.y * h;
-    ctx.strokeStyle = '#ffe066'; ctx.lineWidth = 1;
-    ctx.beginPath(); ctx.moveTo(x, 0); ctx.lineTo(x, y - 6); ctx.stroke();
-    ctx.strokeRect(x - 5, y - 4, 10, 8);
-  };
   d.lines = (lines, n, interval) => {
     spectrum.draw(lines, n, d.status);
     d.linesShown = (d.linesShown || 0) + n;

@@ -5,6 +5,7 @@
 mod device;
 mod display;
 mod doppler;
+mod image_link;
 mod pace;
 mod protocol;
 mod resume;

@@ -119,6 +119,7 @@ fn hello_and_error_round_trip() {
             width: 0.04,
             depth: 0.08,
         },
+        image_link: Some("1f".into()),
     });
     let back: Envelope = serde_json::from_str(&serde_json::to_string(&hello).unwrap()).unwrap();
     match back.body {
@@ -126,7 +127,9 @@ fn hello_and_error_round_trip() {
             mesh,
             state_rate,
             image,
+            image_link,
         } => {
+            assert_eq!(image_link.as_deref(), Some("1f"));
             assert_eq!(mesh.rest.len(), 3);
             assert_eq!(mesh.triangles, vec![[0, 1, 2]]);
             assert_eq!(state_rate, 40.0);
