@@ -738,13 +738,15 @@ try {
   // this page throttled ×THROTTLE. The image reaches the screen without the
   // page's thread: a worker draws it from its own socket (echo_worker.js;
   // its drawing time is the one measured). When the machine starves the
-  // physics (below 80 % of its rate) or the imaging (below 80 % of its 20
-  // frames/s), the page says "falling behind" and the lag is the
-  // simulation's: reported, not asserted. The frame-interval bounds of the
-  // comments above are reported beside it.
+  // physics (below 80 % of its rate, where the page says "falling behind")
+  // or the imaging (below 90 % of its 20 frames/s: each image's render is
+  // part of its lag, and a render that takes longer than its period slows
+  // the rate; with nothing else running this machine holds 19.5–20), the
+  // lag is the simulation's: reported, not asserted. The frame-interval
+  // bounds of the comments above are reported beside it.
   const imageSocket = await page.evaluate(() => window.echothigh.imageSocket === true);
   check('the image comes on its own socket, drawn off the page\'s thread', imageSocket);
-  const imagingKeepsUp = (lag.imaging_rate.p50 ?? 0) >= 0.8 * 20;
+  const imagingKeepsUp = (lag.imaging_rate.p50 ?? 0) >= 0.9 * 20;
   const imageBound = 150 + 50 + 3 * lag.image_interval_p95;
   const lagFigures = `state p95 ${ms(lag.state.p95)} (frame bound ${ms(bound)}), image p95 ${ms(lag.image.p95)} ` +
     `(frame bound ${ms(imageBound)}, image interval p95 ${ms(lag.image_interval_p95)}); ` +
