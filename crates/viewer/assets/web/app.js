@@ -497,7 +497,10 @@ $('exam-stop').addEventListener('click', () => send({ type: 'exam_stop' }));
 $('take-control').addEventListener('click', () => send({ type: 'take_control' }));
 
 // ---- frame loop ----------------------------------------------------------
-let fpsWindow = { t: performance.now(), frames: 0, echo: 0 };
+// The 3D view's rate counts the frames drawn (by the worker or here), not
+// the page's animation frames, most of which draw nothing.
+let renders = 0;
+let fpsWindow = { t: performance.now(), renders: 0, echo: 0 };
 // The leg is drawn when something changed, and at least every
 // REDRAW_MS (a change the page did not flag, e.g. a resize). When the
 // animation frames come slowly (the smoothed interval above SLOW_MS: a
@@ -537,6 +540,7 @@ function adaptWorkerScale(now) {
 }
 /** A frame the worker drew: its cost and arrival for the page's figures. */
 function workerRendered(cost) {
+  renders += 1;
   stamp(live.arrivals.render);
   stamp(live.costs.render, cost);
 }
@@ -554,17 +558,17 @@ function frame(now) {
     scene.render(); adapt.drawn = now;
     // A worker's frame is counted when it reports it drawn (workerRendered).
     if (!(scene instanceof SceneProxy)) {
+      renders += 1;
       adapt.rendered = true; stamp(live.arrivals.render);
       stamp(live.costs.render, performance.now() - t);
     }
   }
   if (plot.dirty) plot.draw();
-  fpsWindow.frames += 1;
   if (now - fpsWindow.t >= 1000) {
     const dt = (now - fpsWindow.t) / 1000;
-    renderedFps = fpsWindow.frames / dt;
+    renderedFps = (renders - fpsWindow.renders) / dt;
     $('echo-fps').textContent = `${((echo.frames - fpsWindow.echo) / dt).toFixed(0)} frames/s`;
-    fpsWindow = { t: now, frames: 0, echo: echo.frames };
+    fpsWindow = { t: now, renders, echo: echo.frames };
   }
   requestAnimationFrame(frame);
 }
