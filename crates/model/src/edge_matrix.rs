@@ -148,7 +148,10 @@ impl EdgeMatrix {
     /// # Panics
     /// If turned on before [`Self::enable_translation`].
     pub fn set_translating(&mut self, on: bool) {
-        assert!(!on || !self.translation.is_empty(), "no translation enabled");
+        assert!(
+            !on || !self.translation.is_empty(),
+            "no translation enabled"
+        );
         self.translating = on;
     }
 

@@ -44,7 +44,11 @@ impl WindowShape {
     /// cells of the mean rest spacing. An error names
     /// `{prefix}.radius` if the patch would wrap the circumference
     /// (`l_θ > n_θ`): the window would then be the whole mesh.
-    pub fn new(mesh: &SurfaceMesh, params: &WindowParams, prefix: &str) -> Result<Self, ConfigError> {
+    pub fn new(
+        mesh: &SurfaceMesh,
+        params: &WindowParams,
+        prefix: &str,
+    ) -> Result<Self, ConfigError> {
         let (d_theta, d_z) = mean_spacing(mesh);
         let cells = |len: f64, d: f64| (len / d).ceil() as usize;
         let radius = (cells(params.radius, d_theta), cells(params.radius, d_z));
@@ -79,10 +83,7 @@ impl WindowShape {
 
     /// Half-widths of the core in cells, `r + m`.
     pub fn reach(&self) -> (usize, usize) {
-        (
-            self.radius.0 + self.margin.0,
-            self.radius.1 + self.margin.1,
-        )
+        (self.radius.0 + self.margin.0, self.radius.1 + self.margin.1)
     }
 
     /// Grid offset `(θ₀, z₀)` of the patch centred on node `(c_θ, c_z)` of
@@ -133,10 +134,11 @@ pub fn mean_spacing(mesh: &SurfaceMesh) -> (f64, f64) {
 }
 
 /// The node of `mesh` nearest (at rest) to `p` (m), by descent on the grid
-/// from node `start` (each move to the nearest of the 8 neighbours): on the
-/// convex skin the distance to a point near it has one minimum over the
-/// grid, so the descent ends there in as many moves as cells to cross.
-/// Allocates nothing.
+/// from node `start` (each move to the nearest of the 8 neighbours, at most
+/// `n_θ + n_z` moves). For a probe near the skin, whose cross-sections are
+/// convex, the distance has a single minimum over the grid near the probe
+/// and the descent from the previous centre reaches it; the window's first
+/// placement scans the whole mesh instead. Allocates nothing.
 pub fn nearest_node(mesh: &SurfaceMesh, p: &Vec3, start: usize) -> usize {
     let x = mesh.rest_positions();
     let (nt, nz) = (mesh.n_theta(), mesh.n_z());
