@@ -189,7 +189,7 @@ fn exam(z0: f64, depth: f64, hold: f64, distance: f64, speed: f64) -> Vec<Vec3> 
     };
     let stay = |path: &mut Vec<Vec3>, t: f64| {
         let last = *path.last().unwrap();
-        path.extend(std::iter::repeat(last).take((t / H).round() as usize));
+        path.extend(std::iter::repeat_n(last, (t / H).round() as usize));
     };
     go(&mut path, Vec3::new(0.0, top - depth, z0), 0.02);
     stay(&mut path, hold);

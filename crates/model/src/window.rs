@@ -22,7 +22,8 @@
 //! node is more than the margin from its centre. A node that enters the
 //! core starts from its held state (its position, zero velocity); a node
 //! that leaves keeps its position and stops (its velocity is set to zero:
-//! held nodes have none). Nothing jumps: positions are continuous, and near
+//! held nodes have none; at the first placement, so does every node
+//! outside the core). Nothing jumps: positions are continuous, and near
 //! the probe the equations do not change. Re-centring costs one pass over
 //! the patch (its springs' constants are reloaded from the mesh's rest
 //! data into the same arrays) and one over the mesh's force buffer; it
@@ -251,7 +252,6 @@ impl ActiveWindow {
         };
         let mut stats = self.integrator.step(sys, h, params, &mut forces);
         stats.timings.move_to_contact(&forces.second_timings);
-        drop(forces);
         let Outer { x, v, .. } = outer_model.outer.into_inner();
         let clock = Instant::now();
         // Held nodes come back as they were (position x₀, velocity 0).

@@ -66,7 +66,7 @@ fn membership_holds_its_invariants_along_a_path() {
             "centre within the margin"
         );
         let mut count = 0;
-        for k in 0..n {
+        for (k, before) in core_before.iter_mut().enumerate() {
             let core = w.is_core(&mesh, k);
             let (dt, dz) = cells(&m, k, focus);
             count += usize::from(core);
@@ -76,7 +76,7 @@ fn membership_holds_its_invariants_along_a_path() {
                     "step {s}: node {k} within the radius is not integrated"
                 );
             }
-            if core_before[k] && !core {
+            if *before && !core {
                 left += 1;
                 assert!(
                     dt > reach.0 || dz > reach.1,
@@ -86,8 +86,8 @@ fn membership_holds_its_invariants_along_a_path() {
             if !core {
                 assert_eq!(m.velocities()[k], Vec3::zeros(), "held nodes do not move");
             }
-            entered += usize::from(core && !core_before[k] && s > 0);
-            core_before[k] = core;
+            entered += usize::from(core && !*before && s > 0);
+            *before = core;
         }
         assert_eq!(count, w.core_count());
         let stats = m.step(0.01, &mut NoExtraForce);
