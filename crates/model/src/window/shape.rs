@@ -168,3 +168,48 @@ pub fn nearest_node(mesh: &SurfaceMesh, p: &Vec3, start: usize) -> usize {
     }
     k
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Radius 3 cells, margin 1: core half-width 4, patch 4·2 + 1 + 4 = 13.
+    fn shape(l_z: usize) -> WindowShape {
+        WindowShape {
+            radius: (3, 3),
+            margin: (1, 1),
+            l_theta: 13,
+            l_z,
+        }
+    }
+
+    #[test]
+    fn the_patch_wraps_around_and_stays_on_the_mesh_along() {
+        let s = shape(13);
+        // Centre at θ = 2 on a 40 × 30 grid: the patch starts 6 nodes
+        // before it, across the seam.
+        assert_eq!(s.origin((2, 15), (40, 30)), (36, 9));
+        // Near the ends along z it is shifted onto the mesh.
+        assert_eq!(s.origin((0, 1), (40, 30)).1, 0);
+        assert_eq!(s.origin((0, 28), (40, 30)).1, 17);
+    }
+
+    #[test]
+    fn the_band_is_held_except_at_the_mesh_ends() {
+        let s = shape(13);
+        assert!(s.in_band((1, 6), 9, 30) && s.in_band((11, 6), 9, 30));
+        assert!(s.in_band((6, 1), 9, 30) && s.in_band((6, 11), 9, 30));
+        assert!(!s.in_band((2, 2), 9, 30) && !s.in_band((10, 10), 9, 30));
+        // Shifted onto the first ring: its rows are the mesh's own.
+        assert!(!s.in_band((6, 0), 0, 30) && s.in_band((6, 12), 0, 30));
+        assert!(!s.in_band((6, 12), 17, 30) && s.in_band((6, 0), 17, 30));
+    }
+
+    #[test]
+    fn the_window_moves_only_beyond_the_margin() {
+        let s = shape(13);
+        assert!(!s.must_move((0, 10), (39, 11), 40)); // one cell, across the seam
+        assert!(s.must_move((0, 10), (38, 10), 40));
+        assert!(s.must_move((0, 10), (0, 12), 40));
+    }
+}
