@@ -239,6 +239,8 @@ impl ProbeContact {
         h: f64,
     ) -> (StepStats, Wrench) {
         let p = Probe::reference_point(pose);
+        // The active window (if configured) follows the probe.
+        model.set_focus(&p);
         let velocity = match self.last_pose {
             Some(prev) if h > 0.0 => (p - Probe::reference_point(&prev)) / h,
             _ => Vec3::zeros(),

@@ -81,3 +81,35 @@ fn fast_and_reference_query_paths_do_not_allocate() {
         );
     }
 }
+
+/// The active window (issue 18) under a sliding probe: the windowed step
+/// (the contact through the patch's index translation) and its
+/// re-centring allocate nothing, nor do the queries beside it.
+#[test]
+fn windowed_contact_steps_do_not_allocate() {
+    let mut config = ModelConfig::default();
+    config.integrator.window.enabled = true;
+    config.integrator.window.radius = 0.03;
+    let top = config.thigh.semi_axis_y;
+    let mut model = ThighModel::new(&config).unwrap();
+    let mut pc = ProbeContact::new(&model, Probe::default(), ContactParams::default()).unwrap();
+    // Press 8 mm (20 steps), then slide 60 mm along the thigh (60 steps).
+    let pose = |i: usize| {
+        let i = i as f64;
+        let d = 0.008 * (i / 20.0).min(1.0);
+        let z = -0.03 + 0.060 * ((i - 20.0) / 60.0).clamp(0.0, 1.0);
+        Probe::exam_pose(Vec3::new(0.0, top - d, z))
+    };
+    pc.step(&mut model, &pose(0), 0.01); // warm-up: places the window
+    let (touched, n) = count_allocations(|| {
+        let mut touched = 0;
+        for i in 1..80 {
+            let s = pc.step(&mut model, &pose(i), 0.01);
+            touched += usize::from(s.sample.in_contact);
+        }
+        touched
+    });
+    assert!(touched > 60, "in contact: {touched}");
+    assert!(model.window().unwrap().moves() >= 3, "the window must move");
+    assert_eq!(n, 0, "allocations during 79 windowed contact steps");
+}

@@ -18,6 +18,15 @@
 //!   that only knows [`BlockSparse`] assembly (the [`crate::ForceModel`]
 //!   default), used only when such a model wrote into it.
 //!
+//! **Index translation** (the active window, [`crate::window`]): a
+//! matrix can take the terms of a force model that numbers nodes in a
+//! larger index space (the whole mesh) while the matrix holds a part of it
+//! ([`Self::enable_translation`]). While translating, [`Self::add_diagonal`],
+//! [`Self::add_spring`] and [`Self::add_rank_one`] map each node through
+//! the translation and drop every block row and column of a node outside
+//! the part: those nodes are held (Dirichlet), so their rows and columns
+//! are filtered out of the solve anyway (Baraff–Witkin's `S A S`).
+//!
 //! `y = A x` is then `y_i = D_i x_i + Σ_{e ∋ i} E_e x_{other}` plus the
 //! rank-one and side terms: the product reads 48 bytes per edge.
 
@@ -88,7 +97,13 @@ pub struct EdgeMatrix {
     side: BlockSparse,
     side_active: bool,
     side_dirty: bool,
+    /// Outer node index → own index (`u32::MAX`: not in this matrix).
+    translation: Vec<u32>,
+    translating: bool,
 }
+
+/// [`EdgeMatrix`]'s translation of a node outside the matrix.
+pub const OUTSIDE: u32 = u32::MAX;
 
 impl EdgeMatrix {
     /// A matrix for the nodes of `pattern` (whose pattern the side matrix
@@ -110,7 +125,44 @@ impl EdgeMatrix {
             side,
             side_active: false,
             side_dirty: false,
+            translation: Vec::new(),
+            translating: false,
         }
+    }
+
+    /// Prepares the translation from an outer index space of `outer_n`
+    /// nodes (every node [`OUTSIDE`] until set through
+    /// [`Self::translation_mut`]). Allocates (once, at set-up).
+    pub fn enable_translation(&mut self, outer_n: usize) {
+        self.translation = vec![OUTSIDE; outer_n];
+    }
+
+    /// The translation, outer index → own index or [`OUTSIDE`].
+    pub fn translation_mut(&mut self) -> &mut [u32] {
+        &mut self.translation
+    }
+
+    /// Turns the translation on or off for the terms added next (see the
+    /// module docs).
+    ///
+    /// # Panics
+    /// If turned on before [`Self::enable_translation`].
+    pub fn set_translating(&mut self, on: bool) {
+        assert!(
+            !on || !self.translation.is_empty(),
+            "no translation enabled"
+        );
+        self.translating = on;
+    }
+
+    /// Own index of node `i` (`None` if outside), translated if translating.
+    #[inline(always)]
+    fn own(&self, i: usize) -> Option<usize> {
+        if !self.translating {
+            return Some(i);
+        }
+        let t = self.translation[i];
+        (t != OUTSIDE).then_some(t as usize)
     }
 
     /// Number of nodes.
@@ -156,7 +208,9 @@ impl EdgeMatrix {
     /// Adds `block` to the diagonal block of node `i`.
     #[inline]
     pub fn add_diagonal(&mut self, i: usize, block: &Matrix3<f64>) {
-        self.diag[i] += block;
+        if let Some(i) = self.own(i) {
+            self.diag[i] += block;
+        }
     }
 
     /// Adds a spring's term: `E = p d dᵀ + q I` at `(i, j)` and `(j, i)`,
@@ -171,6 +225,23 @@ impl EdgeMatrix {
         p: f64,
         q: f64,
     ) -> Result<(), PatternError> {
+        let (i, j) = match (self.own(i), self.own(j)) {
+            (Some(i), Some(j)) => (i, j),
+            (one, other) => {
+                // A held endpoint: only the other node's diagonal block.
+                if let Some(k) = one.or(other) {
+                    self.diag[k] -= EdgeTerm {
+                        i: 0,
+                        j: 0,
+                        d: [d.x, d.y, d.z],
+                        p,
+                        q,
+                    }
+                    .block();
+                }
+                return Ok(());
+            }
+        };
         let e = EdgeTerm {
             i: i as u32,
             j: j as u32,
@@ -214,6 +285,13 @@ impl EdgeMatrix {
         k: &Vec3,
         c: f64,
     ) -> Result<(), PatternError> {
+        // Held nodes drop out: weight 0 on some node of the term.
+        let own = nodes.map(|m| self.own(m));
+        let Some(any) = own.iter().flatten().next().copied() else {
+            return Ok(());
+        };
+        let nodes = own.map(|m| m.unwrap_or(any));
+        let w = [0, 1, 2].map(|r| if own[r].is_some() { w[r] } else { 0.0 });
         let kk = k * k.transpose();
         for (&m, &wm) in nodes.iter().zip(&w) {
             self.diag[m] += kk * (c * wm * wm);
@@ -240,7 +318,14 @@ impl EdgeMatrix {
 
     /// The side matrix (the model's block pattern), zeroed on the first
     /// call of an assembly; whatever is added to it joins the matrix.
+    ///
+    /// # Panics
+    /// While translating (the side matrix is in this matrix's indices).
     pub fn side_mut(&mut self) -> &mut BlockSparse {
+        assert!(
+            !self.translating,
+            "a translated force model must assemble edge terms, not the side matrix"
+        );
         if !self.side_active {
             if self.side_dirty {
                 self.side.clear();

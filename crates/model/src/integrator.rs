@@ -547,4 +547,10 @@ impl ImplicitEuler {
     pub fn edge_matrix(&self) -> &EdgeMatrix {
         &self.edge
     }
+
+    /// The edge-form matrix, mutable: for its index translation (the
+    /// active window, [`crate::window`]); the next assembly overwrites its values.
+    pub fn edge_matrix_mut(&mut self) -> &mut EdgeMatrix {
+        &mut self.edge
+    }
 }

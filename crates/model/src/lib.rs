@@ -39,13 +39,16 @@ pub mod thigh;
 pub mod timings;
 pub mod tissue;
 pub mod tissue_simd;
+pub mod window;
 
 /// A 3-vector of `f64` (m, m/s or N by context).
 pub type Vec3 = nalgebra::Vector3<f64>;
 
 pub use block_sparse::{BlockSparse, PatternError};
 pub use checkpoint::{DivergedError, MAX_POSITION, MAX_SPEED};
-pub use config::{ConfigError, IntegratorParams, ModelConfig, ThighGeometry, TissueParams};
+pub use config::{
+    ConfigError, IntegratorParams, ModelConfig, ThighGeometry, TissueParams, WindowParams,
+};
 pub use edge_matrix::{EdgeMatrix, EdgeTerm, RankOneTerm};
 pub use edge_pcg::EdgePcg;
 pub use force_model::{ForceModel, JacobianScratch, NoExtraForce, SumForce};
@@ -59,3 +62,4 @@ pub use stencil::{Soa3, StencilLayout, StencilMatrix};
 pub use thigh::{Energy, ThighModel};
 pub use timings::StepTimings;
 pub use tissue::TissueForces;
+pub use window::ActiveWindow;

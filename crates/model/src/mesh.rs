@@ -3,6 +3,8 @@
 //! [`crate::leg`]), its triangles, its spring edges by kind, and the inner
 //! layer of anchors (paper §3, Fig. 2).
 
+mod patch;
+
 use crate::config::{ConfigError, ThighGeometry};
 use crate::leg::LegSurface;
 use crate::Vec3;

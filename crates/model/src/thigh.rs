@@ -9,6 +9,7 @@ use crate::integrator::{filter, Dynamics, ImplicitEuler, Kernels, StepStats, Sys
 use crate::mesh::SurfaceMesh;
 use crate::pcg::SolveStats;
 use crate::tissue::TissueForces;
+use crate::window::{ActiveWindow, MeshState};
 use crate::Vec3;
 
 /// Mechanical energy of the model (J).
@@ -48,6 +49,8 @@ pub struct ThighModel {
     stiffness_warm_hit: bool,
     /// The last [`Self::solve_stiffness_with_product`] assembled nothing.
     stiffness_unassembled: bool,
+    /// The active window, if `integrator.window.enabled` (issue 18).
+    window: Option<ActiveWindow>,
 }
 
 impl ThighModel {
@@ -70,7 +73,13 @@ impl ThighModel {
             .map(|a| a * config.tissue.areal_density)
             .collect();
         let n = mesh.node_count();
+        let window = if ip.window.enabled {
+            Some(ActiveWindow::new(&mesh, config)?)
+        } else {
+            None
+        };
         Ok(ThighModel {
+            window,
             config: config.clone(),
             integrator: ImplicitEuler::new(&pattern),
             x: mesh.rest_positions().to_vec(),
@@ -89,8 +98,26 @@ impl ThighModel {
 
     /// Advances the model by `h` (s) with the tissue forces plus `extra`
     /// (e.g. the probe contact) and the external forces: implicit Euler,
-    /// Eq. 1 (see [`crate::integrator`]). Allocates nothing.
+    /// Eq. 1 (see [`crate::integrator`]). With the active window placed
+    /// ([`Self::set_focus`]) only its core is integrated, the rest held
+    /// ([`crate::window`]). Allocates nothing.
     pub fn step(&mut self, h: f64, extra: &mut dyn ForceModel) -> StepStats {
+        if let Some(window) = self.window.as_mut().filter(|w| w.is_placed()) {
+            let state = MeshState {
+                mesh: &self.mesh,
+                x: &mut self.x,
+                v: &mut self.v,
+                mass: &self.mass,
+                external: &self.external,
+                gravity: Vec3::from(self.config.tissue.gravity),
+            };
+            let stats = window.step(state, h, &self.config.integrator, extra);
+            if stats.finite {
+                self.time += h;
+            }
+            self.last = stats;
+            return stats;
+        }
         let mut forces = SumForce::new(&mut self.tissue, extra);
         let sys = Dynamics {
             x: &mut self.x,
@@ -104,15 +131,27 @@ impl ThighModel {
             .integrator
             .step(sys, h, &self.config.integrator, &mut forces);
         // The extra model's share becomes a stage of its own.
-        let extra_time = forces.second_timings;
-        stats.timings.forces = (stats.timings.forces - extra_time.forces).max(0.0);
-        stats.timings.assembly = (stats.timings.assembly - extra_time.assembly).max(0.0);
-        stats.timings.contact += extra_time.forces + extra_time.assembly;
+        stats.timings.move_to_contact(&forces.second_timings);
         if stats.finite {
             self.time += h;
         }
         self.last = stats;
         stats
+    }
+
+    /// Where the probe is (m, its reference point): the active window, if
+    /// configured, follows it (re-centring with hysteresis, see
+    /// [`crate::window`]); without a window nothing happens. Call it before
+    /// each [`Self::step`] (the contact driver does). Allocates nothing.
+    pub fn set_focus(&mut self, p: &Vec3) {
+        if let Some(w) = self.window.as_mut() {
+            w.follow(&self.mesh, p, &mut self.v, &self.mass);
+        }
+    }
+
+    /// The active window, if `integrator.window.enabled`.
+    pub fn window(&self) -> Option<&ActiveWindow> {
+        self.window.as_ref()
     }
 
     /// Solves `(−∂F/∂x) δx = rhs` at the current state, tissue + `extra`,
@@ -324,6 +363,9 @@ impl ThighModel {
     pub fn set_kernels(&mut self, kernels: Kernels) {
         self.integrator.set_kernels(kernels);
         self.tissue.set_kernels(kernels);
+        if let Some(w) = self.window.as_mut() {
+            w.set_kernels(kernels);
+        }
     }
 
     /// Back to rest: rest positions, zero velocities, zero external forces, time 0.
@@ -332,6 +374,9 @@ impl ThighModel {
         self.v.fill(Vec3::zeros());
         self.external.fill(Vec3::zeros());
         self.integrator.reset();
+        if let Some(w) = self.window.as_mut() {
+            w.reset();
+        }
         self.time = 0.0;
         self.last = StepStats::default();
     }

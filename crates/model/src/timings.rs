@@ -34,11 +34,16 @@ pub struct StepTimings {
     /// The extra force model's (the probe contact's) forces and Jacobians
     /// during the Newton iterations, s.
     pub contact: f64,
+    /// The active window's own work (issue 18, [`crate::window`]): finding
+    /// the probe's node, re-centring, and the patch's state gathered from
+    /// and written back to the mesh, s.
+    #[serde(default)]
+    pub window: f64,
 }
 
 impl StepTimings {
     /// Field names, in the order of [`Self::values`] (e.g. CSV columns).
-    pub const NAMES: [&'static str; 8] = [
+    pub const NAMES: [&'static str; 9] = [
         "broad_phase",
         "forces",
         "assembly",
@@ -47,10 +52,11 @@ impl StepTimings {
         "distance_query",
         "step_fraction",
         "contact",
+        "window",
     ];
 
     /// The stage times in the order of [`Self::NAMES`], s.
-    pub fn values(&self) -> [f64; 8] {
+    pub fn values(&self) -> [f64; 9] {
         [
             self.broad_phase,
             self.forces,
@@ -60,6 +66,7 @@ impl StepTimings {
             self.distance_query,
             self.step_fraction,
             self.contact,
+            self.window,
         ]
     }
 
@@ -78,6 +85,16 @@ impl StepTimings {
         self.distance_query += other.distance_query;
         self.step_fraction += other.step_fraction;
         self.contact += other.contact;
+        self.window += other.window;
+    }
+
+    /// Moves an extra force model's share (`extra`: its `forces` and
+    /// `assembly`, as [`crate::SumForce::second_timings`] counts them) out
+    /// of those stages into [`Self::contact`].
+    pub fn move_to_contact(&mut self, extra: &StepTimings) {
+        self.forces = (self.forces - extra.forces).max(0.0);
+        self.assembly = (self.assembly - extra.assembly).max(0.0);
+        self.contact += extra.forces + extra.assembly;
     }
 }
 

@@ -24,7 +24,7 @@ use crate::config::TissueParams;
 use crate::edge_matrix::EdgeMatrix;
 use crate::force_model::{ForceModel, JacobianScratch};
 use crate::integrator::Kernels;
-use crate::mesh::{EdgeKind, SurfaceMesh};
+use crate::mesh::{Edge, EdgeKind, SurfaceMesh};
 use crate::springs::{
     damper_jacobian, linear_force, normal_energy, normal_force, normal_stiffness,
     spring_force_jacobian,
@@ -102,6 +102,79 @@ impl NormalSpring {
     }
 }
 
+impl NormalSpring {
+    /// The constants the SIMD kernels read.
+    fn spec(&self) -> NormalSpec {
+        NormalSpec {
+            anchor: self.anchor,
+            rest: self.rest,
+            a: self.a,
+            b: self.b,
+            c: self.c,
+            n0: self.normal,
+            kt: self.tangential_k,
+            ct: self.tangential_c,
+            x_rest: self.rest_position,
+        }
+    }
+}
+
+/// `(L₀ (m), a (N/m), c (N·s/m))` of the linear spring on edge `e`: the
+/// rest length and the resolution-independent constants of its kind scaled
+/// by `g = ½ (A_i + A_j) / L₀²` (see [`TissueParams`]).
+fn linear_constants(mesh: &SurfaceMesh, params: &TissueParams, e: &Edge) -> (f64, f64, f64) {
+    let (x0, areas) = (mesh.rest_positions(), mesh.areas());
+    let rest = (x0[e.j] - x0[e.i]).norm();
+    let g = 0.5 * (areas[e.i] + areas[e.j]) / (rest * rest);
+    let (a, c) = match e.kind {
+        EdgeKind::Structural => (params.structural_stiffness, params.structural_damping),
+        EdgeKind::Shear => (params.shear_stiffness, params.shear_damping),
+        EdgeKind::Bending => (params.bending_stiffness, params.bending_damping),
+    };
+    (rest, a * g, c * g)
+}
+
+/// Node `k`'s normal spring (its diagonal block at storage index `diag`)
+/// and its step limit `(n₀, h_min)`, `margin` the asymptote margin.
+fn normal_spring(
+    mesh: &SurfaceMesh,
+    params: &TissueParams,
+    k: usize,
+    margin: f64,
+    diag: usize,
+) -> (NormalSpring, (Vec3, f64)) {
+    let (x0, areas) = (mesh.rest_positions(), mesh.areas());
+    let anchor = mesh.anchors()[k];
+    let n0 = mesh.rest_normals()[k];
+    // The anchors lie on the inward rest normal (mesh.rs), so
+    // the column's rest height is the node–anchor distance.
+    let rest = n0.dot(&(x0[k] - anchor));
+    // Layer of rest length L = λ L_ref and stiffness factor φ:
+    // p(x) = φ (x/λ) / (normal_a (x/λ) + normal_b), i.e. the
+    // reference law at the same strain (a = normal_a/(φA),
+    // b = λ normal_b/(φA), asymptote λ b/a < L). The shear tie
+    // scales by φ only, not by 1/λ as a layer's G/L would: its
+    // calibrated value keeps the pressed skin from sliding
+    // sideways (TissueParams), whatever the layer's thickness.
+    let (lambda, phi) = (mesh.layer_scales()[k], mesh.stiffness_factors()[k]);
+    let asymptote = lambda * params.asymptote();
+    let min_length = rest - (1.0 - margin) * asymptote;
+    let spring = NormalSpring {
+        rest_position: x0[k],
+        tangential_k: phi * params.tangential_stiffness * areas[k],
+        tangential_c: phi * params.tangential_damping * areas[k],
+        node: k,
+        anchor,
+        normal: n0,
+        rest,
+        a: params.normal_a / (phi * areas[k]),
+        b: lambda * params.normal_b / (phi * areas[k]),
+        c: params.normal_damping * areas[k],
+        diag,
+    };
+    (spring, (n0, n0.dot(&anchor) + min_length))
+}
+
 /// The tissue's springs and dampers, ready to evaluate.
 #[derive(Debug, Clone)]
 pub struct TissueForces {
@@ -131,28 +204,18 @@ impl TissueForces {
         margin: f64,
         geometric_in_compression: bool,
     ) -> Self {
-        let x0 = mesh.rest_positions();
-        let areas = mesh.areas();
         let index = |r, c| pattern.block_index(r, c).expect("edge in pattern");
-        let springs = mesh
+        let springs: Vec<LinearSpring> = mesh
             .edges()
             .iter()
             .map(|e| {
-                let rest = (x0[e.j] - x0[e.i]).norm();
-                let g = 0.5 * (areas[e.i] + areas[e.j]) / (rest * rest);
-                let (a, c) = match e.kind {
-                    EdgeKind::Structural => {
-                        (params.structural_stiffness, params.structural_damping)
-                    }
-                    EdgeKind::Shear => (params.shear_stiffness, params.shear_damping),
-                    EdgeKind::Bending => (params.bending_stiffness, params.bending_damping),
-                };
+                let (rest, a, c) = linear_constants(mesh, params, e);
                 LinearSpring {
                     i: e.i,
                     j: e.j,
                     rest,
-                    a: a * g,
-                    c: c * g,
+                    a,
+                    c,
                     blocks: [
                         index(e.i, e.i),
                         index(e.i, e.j),
@@ -162,62 +225,14 @@ impl TissueForces {
                 }
             })
             .collect();
-        let normals = (0..mesh.node_count())
-            .map(|k| {
-                let anchor = mesh.anchors()[k];
-                let n0 = mesh.rest_normals()[k];
-                // The anchors lie on the inward rest normal (mesh.rs), so
-                // the column's rest height is the node–anchor distance.
-                let rest = n0.dot(&(x0[k] - anchor));
-                // Layer of rest length L = λ L_ref and stiffness factor φ:
-                // p(x) = φ (x/λ) / (normal_a (x/λ) + normal_b), i.e. the
-                // reference law at the same strain (a = normal_a/(φA),
-                // b = λ normal_b/(φA), asymptote λ b/a < L). The shear tie
-                // scales by φ only, not by 1/λ as a layer's G/L would: its
-                // calibrated value keeps the pressed skin from sliding
-                // sideways (TissueParams), whatever the layer's thickness.
-                let (lambda, phi) = (mesh.layer_scales()[k], mesh.stiffness_factors()[k]);
-                let asymptote = lambda * params.asymptote();
-                let shear = phi;
-                let min_length = rest - (1.0 - margin) * asymptote;
-                let spring = NormalSpring {
-                    rest_position: x0[k],
-                    tangential_k: shear * params.tangential_stiffness * areas[k],
-                    tangential_c: shear * params.tangential_damping * areas[k],
-                    node: k,
-                    anchor,
-                    normal: n0,
-                    rest,
-                    a: params.normal_a / (phi * areas[k]),
-                    b: lambda * params.normal_b / (phi * areas[k]),
-                    c: params.normal_damping * areas[k],
-                    diag: pattern.diagonal_index(k),
-                };
-                (spring, (n0, n0.dot(&anchor) + min_length))
-            })
-            .collect::<Vec<_>>();
-        debug_assert!(normals.iter().enumerate().all(|(k, (s, _))| s.node == k));
-        let limits = normals.iter().map(|(_, l)| *l).collect();
-        let normals: Vec<NormalSpring> = normals.into_iter().map(|(s, _)| s).collect();
-        let springs: Vec<LinearSpring> = springs;
+        let (normals, limits): (Vec<NormalSpring>, Vec<(Vec3, f64)>) = (0..mesh.node_count())
+            .map(|k| normal_spring(mesh, params, k, margin, pattern.diagonal_index(k)))
+            .unzip();
         let specs: Vec<SpringSpec> = springs
             .iter()
             .map(|s| (s.i, s.j, s.rest, s.a, s.c))
             .collect();
-        let normal_specs: Vec<NormalSpec> = normals
-            .iter()
-            .map(|s| NormalSpec {
-                anchor: s.anchor,
-                rest: s.rest,
-                a: s.a,
-                b: s.b,
-                c: s.c,
-                n0: s.normal,
-                kt: s.tangential_k,
-                ct: s.tangential_c,
-                x_rest: s.rest_position,
-            })
-            .collect();
+        let normal_specs: Vec<NormalSpec> = normals.iter().map(NormalSpring::spec).collect();
         let stencil =
             TissueStencil::new(&StencilLayout::from_pattern(pattern), &specs, &normal_specs);
         TissueForces {
@@ -228,6 +243,31 @@ impl TissueForces {
             stencil,
             kernels: Kernels::default(),
         }
+    }
+
+    /// Recomputes every spring's constants from `mesh`, whose topology
+    /// (edges, node count) must be the one this was built from, with other
+    /// rest geometry: the active window moved over the mesh
+    /// ([`crate::window`]). The same constants [`Self::new`] computes.
+    /// Allocates nothing.
+    ///
+    /// # Panics
+    /// If `mesh` has another node or edge count.
+    pub fn reload(&mut self, mesh: &SurfaceMesh, params: &TissueParams, margin: f64) {
+        assert!(
+            mesh.edges().len() == self.springs.len() && mesh.node_count() == self.normals.len()
+        );
+        for (s, e) in self.springs.iter_mut().zip(mesh.edges()) {
+            debug_assert!(s.i == e.i && s.j == e.j);
+            (s.rest, s.a, s.c) = linear_constants(mesh, params, e);
+        }
+        for (k, (s, l)) in self.normals.iter_mut().zip(&mut self.limits).enumerate() {
+            (*s, *l) = normal_spring(mesh, params, k, margin, s.diag);
+        }
+        self.stencil.reload(
+            self.springs.iter().map(|s| (s.rest, s.a, s.c)),
+            self.normals.iter().map(NormalSpring::spec),
+        );
     }
 
     /// The kernels of forces and assembly ([`Kernels::Simd`] unless set).

@@ -71,6 +71,8 @@ pub struct TissueStencil {
     /// `anchor (3), rest, a, b, c, n0 (3), kt, ct, x_rest (3)`, padded.
     normals: [Vec<f64>; 15],
     leftover: Vec<usize>,
+    /// `(class, slot)` of each spring given to [`Self::new`] (`None`: left over).
+    slots: Vec<Option<(usize, usize)>>,
     x: Soa3,
     v: Soa3,
 }
@@ -102,35 +104,67 @@ impl TissueStencil {
             })
             .collect();
         let mut leftover = Vec::new();
+        let mut slots = Vec::with_capacity(springs.len());
         for (e, &(i, j, rest, a, c)) in springs.iter().enumerate() {
             match layout.slot(i, j) {
                 Some((k, s)) if classes[k].a[s] == 0.0 && classes[k].c[s] == 0.0 => {
                     let class = &mut classes[k];
                     (class.a[s], class.c[s], class.rest[s]) = (a, c, rest);
+                    slots.push(Some((k, s)));
                 }
-                _ => leftover.push(e),
+                _ => {
+                    leftover.push(e);
+                    slots.push(None);
+                }
             }
         }
         let mut arrays: [Vec<f64>; 15] = std::array::from_fn(|_| z.clone());
         // b = 1 off the nodes keeps the padding's law finite.
         arrays[B].fill(1.0);
-        let pad = layout.pad();
-        for (k, s) in normals.iter().enumerate() {
-            let values = [
-                s.anchor.x, s.anchor.y, s.anchor.z, s.rest, s.a, s.b, s.c, s.n0.x, s.n0.y, s.n0.z,
-                s.kt, s.ct, s.x_rest.x, s.x_rest.y, s.x_rest.z,
-            ];
-            for (array, v) in arrays.iter_mut().zip(values) {
-                array[pad + k] = v;
-            }
-        }
-        TissueStencil {
+        let mut t = TissueStencil {
             layout: layout.clone(),
             classes,
             normals: arrays,
             leftover,
+            slots,
             x: Soa3::new(layout),
             v: Soa3::new(layout),
+        };
+        for (k, s) in normals.iter().enumerate() {
+            t.set_normal(k, s);
+        }
+        t
+    }
+
+    /// Replaces the constants of the springs given to [`Self::new`] (same
+    /// springs, same order: `(L₀, a, c)` each) and of node `k`'s normal
+    /// spring for every `k`: the same topology with other values (the
+    /// active window moved, [`crate::window`]). Allocates nothing.
+    pub fn reload(
+        &mut self,
+        springs: impl Iterator<Item = (f64, f64, f64)>,
+        normals: impl Iterator<Item = NormalSpec>,
+    ) {
+        for (slot, (rest, a, c)) in self.slots.iter().zip(springs) {
+            if let Some((k, s)) = *slot {
+                let class = &mut self.classes[k];
+                (class.a[s], class.c[s], class.rest[s]) = (a, c, rest);
+            }
+        }
+        for (k, s) in normals.enumerate() {
+            self.set_normal(k, &s);
+        }
+    }
+
+    /// Writes node `k`'s normal spring into the structure-of-arrays data.
+    fn set_normal(&mut self, k: usize, s: &NormalSpec) {
+        let values = [
+            s.anchor.x, s.anchor.y, s.anchor.z, s.rest, s.a, s.b, s.c, s.n0.x, s.n0.y, s.n0.z,
+            s.kt, s.ct, s.x_rest.x, s.x_rest.y, s.x_rest.z,
+        ];
+        let pad = self.layout.pad();
+        for (array, v) in self.normals.iter_mut().zip(values) {
+            array[pad + k] = v;
         }
     }
 

@@ -14,7 +14,32 @@ fn steps_and_stiffness_solves_allocate_nothing() {
     // On the elliptic cylinder and on the patient's leg (issue 12).
     for leg in [false, true] {
         check(leg);
+        check_windowed(leg);
     }
+}
+
+/// The active window (issue 18): following a moving probe (re-centring
+/// included) and stepping allocate nothing either.
+fn check_windowed(leg: bool) {
+    let mut config = common::small_config_on(48, 21, leg);
+    config.integrator.window.enabled = true;
+    config.integrator.window.radius = 0.03;
+    let mut m = common::model(&config);
+    common::press_top(&mut m, 12.0);
+    let mesh = m.mesh().clone();
+    let (it, iz) = mesh.grid_index(common::top_node(&m));
+    let focus = |d: usize| mesh.rest_positions()[mesh.node_index(it, iz - 5 + d % 11)];
+    m.set_focus(&focus(0));
+    m.step(0.01, &mut NoExtraForce); // warm-up: places the window
+    let (moves, n) = count_allocations(|| {
+        for s in 0..30 {
+            m.set_focus(&focus(s));
+            m.step(0.01, &mut NoExtraForce);
+        }
+        m.window().unwrap().moves()
+    });
+    assert!(moves >= 3, "the window must move: {moves}");
+    assert_eq!(n, 0, "allocations during windowed steps (leg: {leg})");
 }
 
 fn check(leg: bool) {

@@ -8,6 +8,10 @@
 //! case also reports the median time of each stage of the step
 //! (`stage_median_s`: `echothigh_model::StepTimings`, monotonic clock).
 //!
+//! The active window (issue 18): the 10 112-node press with and without
+//! it, alternated `--window-rounds` times in the same run (rows `press`
+//! and `window`; `window` in the JSON).
+//!
 //! `--compare` runs instead the same-run A/B of the default system (edge
 //! form, SIMD kernels) against a baseline (`--baseline scalar`: the scalar
 //! kernels; `block-sparse`: the block-sparse reference; `reference-queries`:
@@ -17,7 +21,7 @@
 
 use std::path::PathBuf;
 
-use super::physics_cases::{run_case, CaseReport, Scenario, SIZES};
+use super::physics_cases::{run_case, run_case_windowed, CaseReport, Scenario, SIZES};
 use anyhow::Context;
 
 /// Arguments of `echothigh bench physics`.
@@ -55,6 +59,13 @@ pub struct Args {
     /// (`reference-queries`: only the contact case differs).
     #[arg(long, value_enum, default_value = "scalar")]
     baseline: super::physics_compare::Baseline,
+    /// Rounds of the active window's A/B (10k press with and without the
+    /// window, alternated; 0 skips it).
+    #[arg(long, default_value_t = 3)]
+    window_rounds: usize,
+    /// Radius of the active window (m) in its A/B.
+    #[arg(long, default_value_t = 0.05)]
+    window_radius: f64,
 }
 
 /// Runs the benchmark, prints the table on stderr, writes/prints the JSON.
@@ -89,6 +100,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
             cases.push(r);
         }
     }
+    let window = window_ab(&args)?;
     let contact = if args.contact_steps > 0 {
         let c = super::contact::contact_report(args.contact_steps, args.patient.as_deref())?;
         let on = args.patient.as_deref().unwrap_or("elliptic cylinder");
@@ -106,6 +118,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         // with the contact queries (see `contact.steps_per_second`).
         "goals": { "nodes_10k_press_steps_per_s": 250.0, "default_mesh_with_queries_steps_per_s": 3000.0 },
         "cases": cases,
+        "window": window,
     });
     let text = serde_json::to_string_pretty(&json)?;
     if let Some(path) = &args.out {
@@ -115,6 +128,52 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         println!("{text}");
     }
     Ok(())
+}
+
+/// The active window's A/B: the 10k press without and with the window,
+/// alternated `--window-rounds` times; the rows, and the medians over the
+/// rounds of each side's thread-CPU median per step.
+fn window_ab(args: &Args) -> anyhow::Result<serde_json::Value> {
+    let (nt, nz, steps) = SIZES[4];
+    if args.window_rounds == 0 || nt * nz > args.max_nodes {
+        return Ok(serde_json::Value::Null);
+    }
+    let steps = ((steps as f64 * args.steps_scale).round() as usize).max(1);
+    let mut rounds: Vec<[CaseReport; 2]> = Vec::new();
+    for _ in 0..args.window_rounds {
+        let run = |w| {
+            run_case_windowed(Scenario::Press, (nt, nz), w, steps, args.warmup)
+                .with_context(|| format!("the {nt}×{nz} press, window {w:?}"))
+        };
+        let (full, win) = (run(None)?, run(Some(args.window_radius))?);
+        print_row(&full);
+        print_named_row("window", &win);
+        rounds.push([full, win]);
+    }
+    let median = |side: usize| {
+        let mut v: Vec<f64> = rounds.iter().map(|r| r[side].cpu_median_us).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (full, win) = (median(0), median(1));
+    eprintln!(
+        "window A/B ({} nodes, radius {} m, {} rounds): CPU median µs full {full:.1}, window {win:.1} \
+         ({:.0} against {:.0} steps/s, ×{:.2})",
+        nt * nz,
+        args.window_radius,
+        rounds.len(),
+        1e6 / win,
+        1e6 / full,
+        full / win
+    );
+    Ok(serde_json::json!({
+        "nodes": nt * nz,
+        "radius_m": args.window_radius,
+        "goal_steps_per_s": 1000.0,
+        "full_cpu_median_us": full,
+        "window_cpu_median_us": win,
+        "rounds": rounds,
+    }))
 }
 
 /// `--compare`: the A/B per size (press) and the contact case.
@@ -179,6 +238,10 @@ fn print_row(r: &CaseReport) {
         Scenario::Load => "load",
         Scenario::Press => "press",
     };
+    print_named_row(name, r);
+}
+
+fn print_named_row(name: &str, r: &CaseReport) {
     eprintln!(
         "{name:<6} {:>6}  {:>11.1} {:>11.1} {:>10.1}  {:>11.1} {:>11.1} {:>10.1} {:>9.1} {:>7.2} {:>7}",
         r.nodes,

@@ -11,9 +11,15 @@
 //!   Newton and PCG work while the skin is pushed in and settles.
 //! - `press`: the same patch with a load `15 N · ½(1 − cos 2π f t)` at
 //!   f = 1 Hz: the tissue is never at rest (a probe pressing and releasing).
+//!
+//! Every case tells the model where the probe is (the patch's centre,
+//! `ThighModel::set_focus`): with the active window (issue 18,
+//! [`run_case_windowed`]) only the nodes around it are integrated.
 
 use super::clock::{percentile, thread_cpu_us};
-use echothigh_model::{ConfigError, ModelConfig, NoExtraForce, StepTimings, ThighModel, Vec3};
+use echothigh_model::{
+    ConfigError, ModelConfig, NoExtraForce, StepTimings, ThighModel, Vec3, WindowParams,
+};
 use serde::Serialize;
 use std::time::Instant;
 
@@ -90,6 +96,11 @@ pub struct CaseReport {
     /// Median over the measured steps of each stage's time (s, monotonic
     /// wall clock; see [`StepTimings`]).
     pub stage_median_s: StepTimings,
+    /// The active window's radius (m), if the case ran with one.
+    pub window_radius_m: Option<f64>,
+    /// Nodes integrated implicitly at the last step (all free nodes
+    /// without a window).
+    pub integrated_nodes: usize,
 }
 
 /// Per-stage medians (s) of a run's step timings.
@@ -110,6 +121,7 @@ pub fn stage_medians(timings: &[StepTimings]) -> StepTimings {
         distance_query: median(|t| t.distance_query),
         step_fraction: median(|t| t.step_fraction),
         contact: median(|t| t.contact),
+        window: median(|t| t.window),
     }
 }
 
@@ -171,9 +183,32 @@ pub fn run_case(
     steps: usize,
     warmup: usize,
 ) -> Result<CaseReport, ConfigError> {
+    run_case_windowed(scenario, (n_theta, n_z), None, steps, warmup)
+}
+
+/// [`run_case`], with the active window of radius `window` (m, margin
+/// 10 mm) if given (issue 18).
+pub fn run_case_windowed(
+    scenario: Scenario,
+    (n_theta, n_z): (usize, usize),
+    window: Option<f64>,
+    steps: usize,
+    warmup: usize,
+) -> Result<CaseReport, ConfigError> {
     let mut model = case_model(scenario, n_theta, n_z)?;
+    if let Some(radius) = window {
+        let mut config = model.config().clone();
+        config.integrator.window = WindowParams {
+            enabled: true,
+            radius,
+            margin: 0.01,
+        };
+        model = ThighModel::new(&config)?;
+    }
     let h = model.config().integrator.time_step;
     let patch = probe_patch(&model);
+    let focus =
+        model.mesh().rest_positions()[model.mesh().node_at(std::f64::consts::FRAC_PI_2, 0.0)];
     let load = |model: &mut ThighModel, t: f64| match scenario {
         Scenario::Free => {}
         Scenario::Load => apply_patch_load(model, &patch, 10.0),
@@ -190,6 +225,7 @@ pub fn run_case(
         let t = model.time();
         load(&mut model, t);
         let (start, cpu_start) = (Instant::now(), thread_cpu_us());
+        model.set_focus(&focus);
         let s = model.step(h, &mut NoExtraForce);
         let (elapsed, cpu_elapsed) = (
             start.elapsed().as_secs_f64() * 1e6,
@@ -232,5 +268,10 @@ pub fn run_case(
         limited_total: limited,
         converged_fraction: converged as f64 / n,
         stage_median_s: stage_medians(&stages),
+        window_radius_m: window,
+        integrated_nodes: model.window().map_or_else(
+            || model.fixed().iter().filter(|&&f| !f).count(),
+            |w| w.core_count(),
+        ),
     })
 }

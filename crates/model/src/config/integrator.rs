@@ -1,6 +1,6 @@
 //! `[integrator]`: implicit Euler (Eq. 1), Newton iterations, PCG.
 
-use super::{count_range, range, ConfigError};
+use super::{count_range, range, ConfigError, WindowParams};
 use crate::pcg::{PcgParams, Preconditioner};
 use serde::{Deserialize, Serialize};
 
@@ -74,6 +74,9 @@ pub struct IntegratorParams {
     /// matrix stays SPD and Newton, on the exact residual, converges
     /// linearly instead of quadratically. Default false.
     pub geometric_stiffness_in_compression: bool,
+    /// The active window (issue 18): integrate only the nodes near the
+    /// probe. Off by default.
+    pub window: WindowParams,
 }
 
 impl Default for IntegratorParams {
@@ -90,6 +93,7 @@ impl Default for IntegratorParams {
             preconditioner: Preconditioner::BlockJacobi,
             asymptote_margin: 0.05,
             geometric_stiffness_in_compression: false,
+            window: WindowParams::default(),
         }
     }
 }
@@ -151,6 +155,6 @@ impl IntegratorParams {
             "",
             margin,
         )?;
-        Ok(())
+        self.window.validate(&super::key(prefix, "window"))
     }
 }

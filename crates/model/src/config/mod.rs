@@ -10,10 +10,12 @@
 mod geometry;
 mod integrator;
 mod tissue;
+mod window;
 
 pub use geometry::ThighGeometry;
 pub use integrator::IntegratorParams;
 pub use tissue::TissueParams;
+pub use window::WindowParams;
 
 use serde::{Deserialize, Serialize};
 
