@@ -24,6 +24,7 @@ use crate::reverberation::{LumenSpan, Reverberation};
 use crate::scatterers::ScattererField;
 use crate::smoke::{Smoke, SmokePhase, ROLL as SMOKE_ROLL};
 use crate::specular::SpecularField;
+use crate::stage_times::{wall_seconds, Lap, StageTimes};
 use crate::stages::{
     column_loss, compress_column, convolve_frame, image_depth, splat_add, splat_column, Additive,
     FrameGeometry, LogCompression,
@@ -172,6 +173,10 @@ pub struct Renderer {
     /// The smoke's fields at the frame's time, `None` when the studied
     /// vein holds none (closed, thrombosed, or smoke off).
     smoke_phase: Option<SmokePhase>,
+    /// The clock the stages are timed with (s).
+    stage_clock: fn() -> f64,
+    /// The last frame's stage times.
+    times: StageTimes,
 }
 
 /// A vessel's lumen in a frame (image frame, m).
@@ -414,7 +419,21 @@ impl Renderer {
             lumens: [VesselLumen::default(); MAX_VESSELS],
             lumen_count: 0,
             smoke_phase: None,
+            stage_clock: wall_seconds,
+            times: StageTimes::default(),
         }
+    }
+
+    /// Times the stages of each frame with `clock` (s, any origin; the
+    /// monotonic wall clock by default): e.g. the thread's CPU time in a
+    /// benchmark. Nine reads a frame.
+    pub fn set_stage_clock(&mut self, clock: fn() -> f64) {
+        self.stage_clock = clock;
+    }
+
+    /// The time spent in each stage of the last frame (s).
+    pub fn stage_times(&self) -> StageTimes {
+        self.times
     }
 
     /// The configuration.
@@ -672,15 +691,17 @@ impl Renderer {
     /// 0 at the probe face) on the calling thread. Allocates nothing.
     pub fn render_into(&mut self, input: &FrameInput, out: &mut [u8]) -> Result<(), ImagingError> {
         self.check_out(out)?;
+        let mut lap = Lap::start(self.stage_clock);
         self.prepare(input)?;
+        self.times.prepare = lap.lap();
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2 (checked just above), the only
             // requirement of `stages_avx2`.
-            unsafe { self.stages_avx2(out) };
+            unsafe { self.stages_avx2(out, &mut lap) };
             return Ok(());
         }
-        self.stages::<false>(out);
+        self.stages::<false>(out, &mut lap);
         Ok(())
     }
 
@@ -689,16 +710,17 @@ impl Renderer {
     /// the same order, hence the same floats (no FMA contraction).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn stages_avx2(&mut self, out: &mut [u8]) {
-        self.stages::<true>(out);
+    fn stages_avx2(&mut self, out: &mut [u8], lap: &mut Lap) {
+        self.stages::<true>(out, lap);
     }
 
     /// Stages 2–4 of a frame after [`Renderer::prepare`]: splat, lateral
     /// convolution, compression and the transpose into `out`. `AVX2`: called
     /// from [`Renderer::stages_avx2`] (the splat's taps take AVX2
-    /// instructions; the same floats).
+    /// instructions; the same floats). Each stage's time goes into
+    /// `self.times` from `lap` (started before [`Renderer::prepare`]).
     #[inline(always)]
-    fn stages<const AVX2: bool>(&mut self, out: &mut [u8]) {
+    fn stages<const AVX2: bool>(&mut self, out: &mut [u8], lap: &mut Lap) {
         let w0 = self.window_start(self.pan_columns);
         self.specular.prepare_frame(
             &self.tables,
@@ -715,6 +737,7 @@ impl Renderer {
         } else {
             &t.elev_diffuse[..]
         };
+        let prepared = lap.lap();
         for (b, col) in self.rf.chunks_mut(pr).enumerate() {
             let r = f.bin_start[w0 + b] as usize..f.bin_start[w0 + b + 1] as usize;
             splat_column::<AVX2>(
@@ -739,8 +762,11 @@ impl Renderer {
                 col,
             );
         }
+        self.times.prepare += prepared; // the specular interfaces' depths
+        self.times.splat = lap.lap();
         let rows = self.cfg.rows;
         convolve_frame::<AVX2>(t, &self.rf, pr, self.pad, rows, &mut self.iq);
+        self.times.convolve = lap.lap();
         let h = f.halo;
         let pan_m = self.pan_columns as f64 * self.cfg.pixel_width();
         let adds = Additives {
@@ -777,15 +803,19 @@ impl Renderer {
                 x,
             );
         }
+        self.times.loss = lap.lap();
+        for (j, iq) in self.iq.chunks_mut(rows).enumerate() {
+            echoes.column(g, j, self.bin_u[j + h], self.surface[j + h], iq);
+        }
+        self.times.echoes = lap.lap();
         let dx = self.cfg.pixel_width();
         let reach = (self.blur.half + 1) as f64 * dx + BLUR_MARGIN;
         for (j, (col, iq)) in self
             .gray
             .chunks_mut(rows)
-            .zip(self.iq.chunks_mut(rows))
+            .zip(self.iq.chunks(rows))
             .enumerate()
         {
-            echoes.column(g, j, self.bin_u[j + h], self.surface[j + h], iq);
             let u = self.bin_u[j + h];
             let near = self.shadows.near(u, reach);
             let shadow = self.shadows.column(u);
@@ -809,12 +839,14 @@ impl Renderer {
             };
             compress_column(&self.lc, g, iq, &adds.column(j), x, col);
         }
+        self.times.compress = lap.lap();
         let cols = self.cfg.columns;
         for (i, row) in out.chunks_mut(cols).enumerate() {
             for (j, px) in row.iter_mut().enumerate() {
                 *px = self.gray[j * rows + i];
             }
         }
+        self.times.transpose = lap.lap();
     }
 
     /// The speckle cell area (m²) the PSF predicts at image row `row`: the
@@ -1072,10 +1104,11 @@ mod tests {
                 let (mut a, mut b) = (vec![0u8; n], vec![0u8; n]);
                 r.prepare(&input).unwrap();
                 // SAFETY: the CPU has AVX2 (checked above).
-                unsafe { r.stages_avx2(&mut a) };
+                let mut lap = Lap::start(wall_seconds);
+                unsafe { r.stages_avx2(&mut a, &mut lap) };
                 let iq_a = r.iq.clone();
                 r.prepare(&input).unwrap();
-                r.stages::<false>(&mut b);
+                r.stages::<false>(&mut b, &mut lap);
                 assert!(a == b, "frames differ at press {press}");
                 assert!(
                     iq_a.iter()
