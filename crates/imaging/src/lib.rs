@@ -42,6 +42,8 @@ mod anatomy;
 mod anatomy_config;
 mod beam;
 mod beam_config;
+#[cfg(target_arch = "x86_64")]
+mod compress_avx2;
 mod config;
 mod deformation;
 mod edge_shadow;

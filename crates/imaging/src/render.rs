@@ -837,7 +837,7 @@ impl Renderer {
             } else {
                 own
             };
-            compress_column(&self.lc, g, iq, &adds.column(j), x, col);
+            compress_column::<AVX2>(&self.lc, g, iq, &adds.column(j), x, col);
         }
         self.times.compress = lap.lap();
         let cols = self.cfg.columns;
@@ -1072,8 +1072,14 @@ mod tests {
     use super::*;
 
     /// The AVX2 stages (four taps per instruction) and the scalar fallback
-    /// give the same floats, hence the same frame, through warps, pan and
-    /// both anatomy and phantom fields.
+    /// give the same echo floats (IQ), through warps, pan and both anatomy
+    /// and phantom fields; the AVX2 compression's polynomial `exp` and
+    /// `log₂` ([`crate::compress_avx2`]) leave every pixel within one gray
+    /// level of libm's, on at most 10⁻³ of the pixels: a level moves by
+    /// ≤ 10⁻⁴ (one f32 ulp of `log₂` times ≤ 12.8 gray per unit), so it
+    /// rounds differently only within 10⁻⁴ of a half level, ≈ 2·10⁻⁴ of
+    /// the pixels if levels spread evenly over a level's width; 5× that
+    /// for the clustering of levels about a few values.
     #[test]
     fn avx2_and_scalar_stages_give_the_same_frame() {
         if !std::arch::is_x86_feature_detected!("avx2") {
@@ -1092,6 +1098,7 @@ mod tests {
         };
         let mut speckle = Renderer::phantom(&cfg, &phantom).unwrap();
         let n = cfg.columns * cfg.rows;
+        let (mut differ, mut total) = (0usize, 0usize);
         for r in [&mut leg, &mut speckle] {
             for (k, press) in [2e-3, 9e-3, 14e-3].into_iter().enumerate() {
                 let d = SectionDeformation::flat_press(press, 0.04, 1.5e-3, bone).unwrap();
@@ -1109,7 +1116,12 @@ mod tests {
                 let iq_a = r.iq.clone();
                 r.prepare(&input).unwrap();
                 r.stages::<false>(&mut b, &mut lap);
-                assert!(a == b, "frames differ at press {press}");
+                assert!(
+                    a.iter().zip(&b).all(|(x, y)| x.abs_diff(*y) <= 1),
+                    "frames more than a level apart at press {press}"
+                );
+                differ += a.iter().zip(&b).filter(|(x, y)| x != y).count();
+                total += n;
                 assert!(
                     iq_a.iter()
                         .zip(&r.iq)
@@ -1119,5 +1131,10 @@ mod tests {
                 );
             }
         }
+        eprintln!("AVX2 vs scalar frames: {differ} of {total} pixels differ");
+        assert!(
+            differ as f64 <= 1e-3 * total as f64,
+            "{differ} of {total} pixels differ"
+        );
     }
 }
