@@ -61,7 +61,6 @@ mod reverberation;
 mod scatterers;
 mod smoke;
 mod specular;
-mod splat;
 mod stage_times;
 mod stages;
 mod structure_config;

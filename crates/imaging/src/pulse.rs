@@ -198,18 +198,6 @@ pub(crate) struct AxialTables {
     /// [`knot`](Self::knot) of rows `0 .. rows + K` (the splat's reach)
     /// as a table: `row_knot[i] = knot(i)`.
     pub row_knot: Vec<u32>,
-    /// Groups of four rows a scatterer's `2K` taps span from any row
-    /// within a group: `⌈(2K + 3)/4⌉`.
-    pub groups: usize,
-    /// `taps` with three zero taps before each table and the rest of its
-    /// [`padded_len`](Self::padded_len) zero after:
-    /// `padded[(knot · 64 + q) · padded_len + 3 + t] = taps[(knot · 64 + q) · 2K + t]`.
-    /// The four taps from `3 − s + 4m` are what a scatterer whose first
-    /// tap falls on row `s` of a group adds to the `m`-th group (zero
-    /// outside its taps).
-    pub padded: Vec<[f32; 2]>,
-    /// Length of each padded table: `4 · groups + 3`.
-    pub padded_len: usize,
 }
 
 /// Sub-pixel positions of the axial tables.
@@ -250,12 +238,6 @@ impl AxialTables {
             }
             energy.push(e / AXIAL_SUBSTEPS as f64);
         }
-        let groups = (taps_n + 3).div_ceil(4);
-        let padded_len = 4 * groups + 3;
-        let mut padded = vec![[0.0f32; 2]; taps.len() / taps_n * padded_len];
-        for (p, t) in padded.chunks_mut(padded_len).zip(taps.chunks(taps_n)) {
-            p[3..3 + taps_n].copy_from_slice(t);
-        }
         let mut t = AxialTables {
             half,
             rows_per_knot,
@@ -263,9 +245,6 @@ impl AxialTables {
             taps,
             energy,
             row_knot: Vec::new(),
-            groups,
-            padded,
-            padded_len,
         };
         t.row_knot = (0..rows + half).map(|i| t.knot(i as f64) as u32).collect();
         t

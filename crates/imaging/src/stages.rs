@@ -1,10 +1,11 @@
-//! The per-column stages of a frame, run by the renderer: lateral
-//! convolution, and attenuation/TGC plus log compression (the axial splat
-//! of the scatterers is [`crate::splat`]).
+//! The per-column stages of a frame, run by the renderer: axial splat of
+//! the scatterers (complex baseband PSF), lateral convolution, and
+//! attenuation/TGC plus log compression.
 
 use crate::anatomy::{Anatomy, MAX_BREAKPOINTS};
 use crate::deformation::column_depth;
-use crate::psf::{safe_log2, PsfTables, BLOCK_ROWS};
+use crate::psf::{safe_log2, PsfTables, BLOCK_ROWS, PHASE_STEPS};
+use crate::pulse::AXIAL_SUBSTEPS;
 use crate::warp::WarpSet;
 
 /// Frame-wide quantities the column stages read.
@@ -28,6 +29,184 @@ pub(crate) struct FrameGeometry {
 pub(crate) fn image_depth(g: &FrameGeometry, surface: f64, warps: &WarpSet, depth: f64) -> f64 {
     let d = warps.apply(depth);
     column_depth(surface, g.bone, d) - g.face
+}
+
+/// Scatterers whose setup [`splat_column`] computes together: two AVX2
+/// registers of f64 lanes, on the stack (nothing allocated per frame).
+const SPLAT_BATCH: usize = 8;
+
+/// Clears the padded column `out` and splats into it (see [`splat_add`]).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn splat_column<const AVX2: bool>(
+    t: &PsfTables,
+    g: &FrameGeometry,
+    elev: &[f32],
+    depth: &[f32],
+    amp: &[[f32; 2]],
+    surface: f64,
+    warps: &WarpSet,
+    out: &mut [[f32; 2]],
+) {
+    out.fill([0.0, 0.0]);
+    splat_add::<AVX2>(t, g, elev, depth, amp, surface, warps, out);
+}
+
+/// Adds the axial PSF of each scatterer of one bin into its padded column
+/// `out` (`rows + 2·pad` complex samples), weighted by the
+/// elevation weight `elev` of its splat row (`row + pad`). The per-scatterer
+/// setup (depth through the deformation, row, sub-row, phase) is computed
+/// [`SPLAT_BATCH`] scatterers at a time, then their taps are added one
+/// scatterer after the other: the same float operations per scatterer, in
+/// the same order into `out`. `AVX2`: the caller runs with AVX2 enabled
+/// (see [`add_taps`]).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(crate) fn splat_add<const AVX2: bool>(
+    t: &PsfTables,
+    g: &FrameGeometry,
+    elev: &[f32],
+    depth: &[f32],
+    amp: &[[f32; 2]],
+    surface: f64,
+    warps: &WarpSet,
+    out: &mut [[f32; 2]],
+) {
+    let ax = &t.axial;
+    let k = ax.half;
+    let taps = 2 * k;
+    let inv_dz = 1.0 / g.dz;
+    let lowest = -(k as f64) - 1.0;
+    let highest = (g.rows + k) as f64;
+    let any_warp = warps.is_active();
+    let last = elev.len() as i64 - 1;
+    let phase_mask = PHASE_STEPS as i32 - 1;
+    for (ds, amps) in depth.chunks(SPLAT_BATCH).zip(amp.chunks(SPLAT_BATCH)) {
+        // Setup of the batch, lane by lane without branches (the compiler
+        // takes several lanes per instruction): image depth, fractional row,
+        // its floor, sub-row and phase index. Lanes past the batch's end, and
+        // lanes the loop below skips or stops at, are computed for nothing.
+        let mut z = [0.0f64; SPLAT_BATCH];
+        if any_warp {
+            for (zk, &d) in z.iter_mut().zip(ds) {
+                *zk = image_depth(g, surface, warps, d as f64);
+            }
+        } else {
+            for (zk, &d) in z.iter_mut().zip(ds) {
+                *zk = column_depth(surface, g.bone, d as f64) - g.face;
+            }
+        }
+        let mut r = [0.0f64; SPLAT_BATCH];
+        let mut fl = [0i32; SPLAT_BATCH];
+        let mut q = [0i32; SPLAT_BATCH];
+        let mut ph = [0i32; SPLAT_BATCH];
+        for l in 0..SPLAT_BATCH {
+            let rl = z[l] * inv_dz - 0.5;
+            let f = rl.floor();
+            r[l] = rl;
+            // For a splatted scatterer r − fl ∈ [0, 1) and −K − 1 ≤ fl <
+            // rows + K: the conversions through i32 give what the saturating
+            // ones to usize/i64 would, and clamping the sub-row at 63 before
+            // the truncation gives what clamping after it would.
+            q[l] = ((rl - f) * AXIAL_SUBSTEPS as f64).min((AXIAL_SUBSTEPS - 1) as f64) as i32;
+            fl[l] = f as i32;
+            // |z · 2k₀/2π · 4096| < 2³¹ for |z| < 53 m: the i32 truncation
+            // is the i64 one, and its low 12 bits the same.
+            ph[l] = (z[l] * t.phase_per_metre) as i32 & phase_mask;
+        }
+        for (l, a) in amps.iter().enumerate() {
+            if r[l] < lowest {
+                continue;
+            }
+            if r[l] >= highest {
+                return; // depths are sorted and the map is increasing
+            }
+            let p = t.phase[ph[l] as usize];
+            let fi = fl[l] as i64;
+            let e = elev[(fi + g.pad as i64).clamp(0, last) as usize];
+            let c = [
+                e * (a[0] * p[0] - a[1] * p[1]),
+                e * (a[0] * p[1] + a[1] * p[0]),
+            ];
+            // First tap: row fl − K + 1, at index fl − K + 1 + pad ≥ 0.
+            let first = (fi - k as i64 + 1 + g.pad as i64) as usize;
+            // `ax.knot(r)` from its table (no division).
+            let knot = ax.row_knot[fi.max(0) as usize] as usize;
+            let base = (knot * AXIAL_SUBSTEPS + q[l] as usize) * taps;
+            add_taps::<AVX2>(
+                &mut out[first..first + taps],
+                &ax.taps[base..base + taps],
+                c,
+            );
+        }
+    }
+}
+
+/// `out[t] += c · w[t]` (complex) for every tap `t` (`out` and `w` of one
+/// length): `re += c₀w₀ − c₁w₁`, `im += c₀w₁ + c₁w₀`, one tap at a time, or
+/// with `AVX2` four taps per instruction ([`add_taps_avx2`]), which computes
+/// the same floats.
+#[inline(always)]
+fn add_taps<const AVX2: bool>(out: &mut [[f32; 2]], w: &[[f32; 2]], c: [f32; 2]) {
+    #[cfg(target_arch = "x86_64")]
+    if AVX2 {
+        // SAFETY: `AVX2` is true only in the code that `Renderer::stages_avx2`
+        // runs, after the CPU was found to have AVX2.
+        unsafe { add_taps_avx2(out, w, c) };
+        return;
+    }
+    for (o, wk) in out.iter_mut().zip(w) {
+        o[0] += c[0] * wk[0] - c[1] * wk[1];
+        o[1] += c[0] * wk[1] + c[1] * wk[0];
+    }
+}
+
+/// [`add_taps`] four taps (eight interleaved floats) at a time, in place:
+/// `a = c₀ (w₀, w₁)`, `b = c₁ (w₁, w₀)` (the pair swapped in its lane),
+/// then `addsub(a, b) = (c₀w₀ − c₁w₁, c₀w₁ + c₁w₀)` added to `out`: per lane
+/// the scalar loop's products, difference or sum and accumulation, in the
+/// same order and without FMA contraction, so the same floats, without
+/// splitting real and imaginary parts apart and back. Two taps left over
+/// (`w.len()` is even, `2K`) go through the 128-bit form of the same steps,
+/// a last odd tap through the scalar loop.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline] // into the AVX2 splat: a call per scatterer costs as much as its taps
+fn add_taps_avx2(out: &mut [[f32; 2]], w: &[[f32; 2]], c: [f32; 2]) {
+    use std::arch::x86_64::*;
+    let n = out.len().min(w.len());
+    let (out, w) = (&mut out[..n], &w[..n]);
+    let (o4, o_rest) = out.as_chunks_mut::<4>();
+    let (w4, w_rest) = w.as_chunks::<4>();
+    let (c0, c1) = (_mm256_set1_ps(c[0]), _mm256_set1_ps(c[1]));
+    for (o, wk) in o4.iter_mut().zip(w4) {
+        // SAFETY: 4 × [f32; 2] = 8 contiguous f32 behind each reference;
+        // unaligned loads and stores.
+        unsafe {
+            let wv = _mm256_loadu_ps(wk.as_ptr().cast());
+            let ws = _mm256_permute_ps::<0b10_11_00_01>(wv);
+            let t = _mm256_addsub_ps(_mm256_mul_ps(c0, wv), _mm256_mul_ps(c1, ws));
+            let op = o.as_mut_ptr().cast::<f32>();
+            _mm256_storeu_ps(op, _mm256_add_ps(_mm256_loadu_ps(op), t));
+        }
+    }
+    let (o2, o_last) = o_rest.as_chunks_mut::<2>();
+    let (w2, w_last) = w_rest.as_chunks::<2>();
+    let (c0, c1) = (_mm_set1_ps(c[0]), _mm_set1_ps(c[1]));
+    for (o, wk) in o2.iter_mut().zip(w2) {
+        // SAFETY: 2 × [f32; 2] = 4 contiguous f32 behind each reference.
+        unsafe {
+            let wv = _mm_loadu_ps(wk.as_ptr().cast());
+            let ws = _mm_permute_ps::<0b10_11_00_01>(wv);
+            let t = _mm_addsub_ps(_mm_mul_ps(c0, wv), _mm_mul_ps(c1, ws));
+            let op = o.as_mut_ptr().cast::<f32>();
+            _mm_storeu_ps(op, _mm_add_ps(_mm_loadu_ps(op), t));
+        }
+    }
+    for (o, wk) in o_last.iter_mut().zip(w_last) {
+        o[0] += c[0] * wk[0] - c[1] * wk[1];
+        o[1] += c[0] * wk[1] + c[1] * wk[0];
+    }
 }
 
 /// Output column `j` of the lateral convolution with the depth-dependent
