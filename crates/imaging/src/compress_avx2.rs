@@ -29,9 +29,9 @@ use crate::stages::{Additive, FrameGeometry, LogCompression};
 use std::arch::x86_64::*;
 
 /// `ln 2` split for the reduction (fdlibm's): `LN2_HI` has 32 significant bits.
-const LN2_HI: f64 = 6.931_471_803_691_238_164_9e-1;
+const LN2_HI: f64 = 6.931_471_803_691_238e-1;
 /// `ln 2 − LN2_HI`.
-const LN2_LO: f64 = 1.908_214_929_270_587_700_02e-10;
+const LN2_LO: f64 = 1.908_214_929_270_587_7e-10;
 /// `1.5 · 2⁵²`: added to a float of magnitude < 2⁵¹, rounds it to the
 /// nearest integer (ties to even), held in the low mantissa bits.
 const ROUND_MAGIC: f64 = 6_755_399_441_055_744.0;
