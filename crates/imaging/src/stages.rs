@@ -528,9 +528,11 @@ pub(crate) fn column_loss(
 /// the frame's corrections), added clutter and noise, TGC along one column,
 /// and the log compression of its envelope into `gray`: the received echo
 /// `(iq + clutter) e^{x} + noise`, displayed with the TGC gain
-/// `2 f α_TGC z` dB.
+/// `2 f α_TGC z` dB. With `AVX2`, eight rows at a time with polynomial
+/// `exp` and `log₂` ([`crate::compress_avx2`]: within one gray level of
+/// this scalar libm loop, on a small fraction of pixels).
 #[inline(always)]
-pub(crate) fn compress_column(
+pub(crate) fn compress_column<const AVX2: bool>(
     lc: &LogCompression,
     g: &FrameGeometry,
     iq: &[[f32; 2]],
@@ -538,10 +540,32 @@ pub(crate) fn compress_column(
     loss_np: &[f64],
     gray: &mut [u8],
 ) {
-    // Independent pixels, which the compiler may take several at a time:
-    // loss, clutter and noise, TGC, log compression.
+    #[cfg(target_arch = "x86_64")]
+    if AVX2 {
+        // SAFETY: `AVX2` is true only in the code that
+        // `Renderer::stages_avx2` runs, after the CPU was found to have AVX2.
+        unsafe { crate::compress_avx2::compress_column_avx2(lc, g, iq, add, loss_np, gray) };
+        return;
+    }
+    compress_rows(lc, g, 0, iq, add, loss_np, gray);
+}
+
+/// [`compress_column`]'s scalar loop over rows `first ..` of a column
+/// (`iq`, `add`, `loss_np` and `gray` start at row `first`), with libm's
+/// `exp` and `log2f`.
+#[inline(always)]
+pub(crate) fn compress_rows(
+    lc: &LogCompression,
+    g: &FrameGeometry,
+    first: usize,
+    iq: &[[f32; 2]],
+    add: &Additive,
+    loss_np: &[f64],
+    gray: &mut [u8],
+) {
+    // Independent pixels: loss, clutter and noise, TGC, log compression.
     for (i, ((px, out), &x)) in iq.iter().zip(gray.iter_mut()).zip(loss_np).enumerate() {
-        let zi = (i as f64 + 0.5) * g.dz;
+        let zi = ((first + i) as f64 + 0.5) * g.dz;
         let loss = x.exp() as f32;
         let gain = 2.0 * lc.f_mhz * lc.tgc * zi * 100.0;
         let (c, ca, nz) = (add.clutter[i], add.clutter_amp[i], add.noise[i]);

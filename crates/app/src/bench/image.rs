@@ -10,7 +10,9 @@
 use super::clock::thread_cpu_us;
 use anyhow::{Context, Result};
 use echothigh_anatomy::{ProbePose, Site};
-use echothigh_imaging::{FrameInput, ImagingConfig, Renderer, SectionDeformation, VeinState};
+use echothigh_imaging::{
+    FrameInput, ImagingConfig, Renderer, SectionDeformation, StageTimes, VeinState,
+};
 use echothigh_model::LegSurface;
 use echothigh_runtime::scenario::Scenario;
 use echothigh_runtime::section_follow::SectionImager;
@@ -68,13 +70,39 @@ fn timing(mut t: Vec<f64>, threads: usize) -> Timing {
     }
 }
 
+/// The calling thread's CPU time (s): the renderer's stage clock here.
+fn thread_cpu_s() -> f64 {
+    thread_cpu_us() * 1e-6
+}
+
+/// Median thread-CPU time (s) of each stage over the timed frames.
+fn stage_medians(stages: &[StageTimes]) -> serde_json::Value {
+    let median = |f: fn(&StageTimes) -> f64| {
+        let mut v: Vec<f64> = stages.iter().map(f).collect();
+        v.sort_by(f64::total_cmp);
+        v[(v.len() - 1) / 2]
+    };
+    serde_json::json!({
+        "prepare": median(|s| s.prepare),
+        "splat": median(|s| s.splat),
+        "convolve": median(|s| s.convolve),
+        "loss": median(|s| s.loss),
+        "echoes": median(|s| s.echoes),
+        "compress": median(|s| s.compress),
+        "transpose": median(|s| s.transpose),
+    })
+}
+
 /// Renders `frames` frames (after 10 warm-up ones); returns the thread-CPU
-/// and wall times of each (s).
+/// and wall times of each (s), and the median thread-CPU time of each
+/// stage (s, [`Renderer::stage_times`]).
 fn run_frames(
     r: &mut Renderer,
     presses: &[SectionDeformation],
     frames: usize,
-) -> Result<(Vec<f64>, Vec<f64>)> {
+) -> Result<(Vec<f64>, Vec<f64>, serde_json::Value)> {
+    r.set_stage_clock(thread_cpu_s);
+    let mut stages = Vec::with_capacity(frames);
     let (w, h) = r.frame_size();
     let mut out = vec![0u8; w * h];
     let mut cpu = Vec::with_capacity(frames);
@@ -94,9 +122,10 @@ fn run_frames(
         if k >= 10 {
             cpu.push((c1 - c0) * 1e-6);
             wall.push(dt);
+            stages.push(r.stage_times());
         }
     }
-    Ok((cpu, wall))
+    Ok((cpu, wall, stage_medians(&stages)))
 }
 
 /// Times one frame size; returns its JSON report.
@@ -125,7 +154,7 @@ fn bench_size(
             SectionDeformation::flat_press(depth, cfg.probe_width, 1.5e-3, bone)
         })
         .collect::<Result<_, _>>()?;
-    let (cpu, wall) = run_frames(&mut r, &presses, frames)?;
+    let (cpu, wall, stages) = run_frames(&mut r, &presses, frames)?;
     Ok(serde_json::json!({
         "columns": cfg.columns,
         "rows": cfg.rows,
@@ -139,6 +168,7 @@ fn bench_size(
         "axial_taps": r.axial_taps(),
         "one_core_thread_cpu": timing(cpu, 1),
         "one_core_wall": timing(wall, 1),
+        "stage_thread_cpu_median_s": stages,
     }))
 }
 
@@ -167,7 +197,7 @@ fn bench_live(site: Option<Site>, frames: usize) -> Result<serde_json::Value> {
             SectionDeformation::flat_press(depth, width_m, 1.5e-3, bone)
         })
         .collect::<Result<_, _>>()?;
-    let (cpu, wall) = run_frames(r, &presses, frames)?;
+    let (cpu, wall, stages) = run_frames(r, &presses, frames)?;
     let (columns, rows) = r.frame_size();
     Ok(serde_json::json!({
         "columns": columns,
@@ -182,6 +212,7 @@ fn bench_live(site: Option<Site>, frames: usize) -> Result<serde_json::Value> {
         "axial_taps": r.axial_taps(),
         "one_core_thread_cpu": timing(cpu, 1),
         "one_core_wall": timing(wall, 1),
+        "stage_thread_cpu_median_s": stages,
     }))
 }
 
