@@ -415,16 +415,24 @@ pub fn same_origin(headers: &HeaderMap) -> bool {
     }
 }
 
+/// Why a WebSocket upgrade is refused, if it is: a host name that is not
+/// this machine's loopback ([`host_refused`]), or another site's page
+/// ([`same_origin`]).
+fn socket_refused(app: &AppState, headers: &HeaderMap) -> Option<Response> {
+    if let Some(r) = host_refused(app, headers) {
+        return Some(r);
+    }
+    (!same_origin(headers))
+        .then(|| (StatusCode::FORBIDDEN, "cross-origin WebSocket refused").into_response())
+}
+
 async fn ws_upgrade(
     ws: WebSocketUpgrade,
     headers: HeaderMap,
     State(app): State<Arc<AppState>>,
 ) -> Response {
-    if let Some(r) = host_refused(&app, &headers) {
+    if let Some(r) = socket_refused(&app, &headers) {
         return r;
-    }
-    if !same_origin(&headers) {
-        return (StatusCode::FORBIDDEN, "cross-origin WebSocket refused").into_response();
     }
     ws.max_message_size(64 * 1024)
         .on_upgrade(move |socket| session(socket, app))
@@ -439,11 +447,8 @@ async fn image_upgrade(
     Query(query): Query<std::collections::HashMap<String, String>>,
     State(app): State<Arc<AppState>>,
 ) -> Response {
-    if let Some(r) = host_refused(&app, &headers) {
+    if let Some(r) = socket_refused(&app, &headers) {
         return r;
-    }
-    if !same_origin(&headers) {
-        return (StatusCode::FORBIDDEN, "cross-origin WebSocket refused").into_response();
     }
     let token = query
         .get("token")

@@ -12,6 +12,7 @@ use futures_util::{SinkExt, StreamExt};
 use std::sync::Arc;
 use std::time::Duration;
 use tokio::time::Instant;
+use tokio_tungstenite::tungstenite::client::IntoClientRequest;
 use tokio_tungstenite::tungstenite::Message;
 
 fn is_image(m: &Message) -> bool {
@@ -135,4 +136,32 @@ async fn images_come_back_on_the_main_socket_when_the_worker_closes() {
         main >= 2,
         "{main} images on the main socket in 1 s after the worker closed"
     );
+}
+
+/// The image socket has `/ws`'s guards: another site's page (its `Origin`),
+/// or a rebound host name (`Host: evil.example`), is refused with 403 even
+/// with a token on offer, which then still opens from this page.
+#[tokio::test]
+async fn another_sites_page_cannot_open_the_image_socket() {
+    let fake = Arc::new(FakeLive::new());
+    let addr = start(fake).await;
+    let mut ws = connect(addr).await;
+    let offered = token(&mut ws).await;
+    let url = format!("ws://{addr}/ws/image?token={offered}");
+    let evil = format!("evil.example:{}", addr.port());
+    for (host, origin) in [
+        (None, "http://evil.example".to_string()),
+        (Some(evil.clone()), format!("http://{evil}")),
+    ] {
+        let mut req = url.as_str().into_client_request().unwrap();
+        if let Some(h) = host {
+            req.headers_mut().insert("host", h.parse().unwrap());
+        }
+        req.headers_mut().insert("origin", origin.parse().unwrap());
+        match tokio_tungstenite::connect_async(req).await {
+            Err(tokio_tungstenite::tungstenite::Error::Http(r)) => assert_eq!(r.status(), 403),
+            other => panic!("{origin}: not refused with 403: {:?}", other.map(|_| ())),
+        }
+    }
+    assert!(open_link(addr, &offered).await.is_ok());
 }
