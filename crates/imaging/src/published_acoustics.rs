@@ -139,7 +139,7 @@ fn the_attenuation_slopes_lie_in_the_published_ranges() {
     // Blood, skin: the single values of [D23]. Cortical bone: [S23] 1–10 to
     // [D23] 15. Fascia is left out: its 0.8 is under [D23]'s connective
     // tissue (1.57), kept because 1.57 fails the lumen segmentation test
-    // (docs/imaging-sources.md).
+    // of tests/lumen.rs (docs/imaging-sources.md).
     let cases = [
         (Tissue::Muscle, 0.55, 0.96),
         (Tissue::Fat, 0.63, 0.8),

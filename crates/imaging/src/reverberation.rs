@@ -253,7 +253,9 @@ mod tests {
     #[test]
     fn levels_follow_the_reflection_coefficients() {
         let r = Reverberation::new(&ReverbConfig::default(), 7);
-        // (0.23 · 0.10)² per extra round trip: −32.8 dB.
+        // (0.23 · 0.10)² per extra round trip: −32.8 dB (R_i = 0.10 lies in
+        // the published 0.060–0.214 of `published_acoustics.rs`; R_p = 0.23
+        // is an estimate).
         let near = 20.0 * (r.near_gain[2] as f64).log10();
         assert!((near + 32.77).abs() < 0.05, "{near}");
         // +18.9 dB for the wall, −40 dB for the round trip.

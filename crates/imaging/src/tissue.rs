@@ -10,11 +10,11 @@
 //! fat 0.63, skin 0.35 and blood 0.15, the values of that table; cortical
 //! bone 15, its "bone" (Sensors 23(13):5942, 2023, gives 1–10 for cortical
 //! bone). Fascia 0.8 lies under that table's connective tissue (1.57),
-//! kept: at 1.57 the two 0.5 mm fascia crossings above the vessels take
-//! 1.2 dB more (round trip, 7.5 MHz) and the segmented healthy lumen of
-//! `tests/lumen.rs` grew to 1.352 × its model area (the test asks < 1.35;
-//! found by reverting that value alone, not analysed further). Vessel
-//! walls 0.8 have no source.
+//! kept: at 1.57 the segmented rest lumens of `tests/lumen.rs` (healthy
+//! state) grew from 0.867 to 1.216 × the vein's model area and from 1.183
+//! to 1.352 × the artery's (the test asks < 1.35), far more than the
+//! 1.2 dB (round trip, 7.5 MHz) the two flat 0.5 mm fascia crossings above
+//! the vessels add; not analysed further. Vessel walls 0.8 have no source.
 //!
 //! **Backscatter** (echo relative to muscle): estimates that reproduce the
 //! B-mode appearance described in clinical texts, not measured levels —
