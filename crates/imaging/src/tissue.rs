@@ -7,14 +7,10 @@
 //! `src/published_acoustics.rs`, `docs/imaging-sources.md`): muscle 0.7,
 //! across the fibres as the transverse section sees it, within 0.55
 //! (bovine muscle, 4 MHz) to 0.96 (Diagnostics 13(5):855, 2023, table 4);
-//! fat 0.63, skin 0.35 and blood 0.15, the values of that table; cortical
-//! bone 15, its "bone" (Sensors 23(13):5942, 2023, gives 1–10 for cortical
-//! bone). Fascia 0.8 lies under that table's connective tissue (1.57),
-//! kept: at 1.57 the segmented rest lumens of `tests/lumen.rs` (healthy
-//! state) grew from 0.867 to 1.216 × the vein's model area and from 1.183
-//! to 1.352 × the artery's (the test asks < 1.35), far more than the
-//! 1.2 dB (round trip, 7.5 MHz) the two flat 0.5 mm fascia crossings above
-//! the vessels add; not analysed further. Vessel walls 0.8 have no source.
+//! fat 0.63, skin 0.35, blood 0.15 and fascia 1.57 (connective tissue),
+//! the values of that table; cortical bone 15, its "bone" (Sensors
+//! 23(13):5942, 2023, gives 1–10 for cortical bone). Vessel walls 0.8
+//! have no source.
 //!
 //! **Backscatter** (echo relative to muscle): estimates that reproduce the
 //! B-mode appearance described in clinical texts, not measured levels —
@@ -81,7 +77,7 @@ impl Tissue {
             Tissue::Gel => (None, 0.0),
             Tissue::Skin => (Some(8.0), 0.35),
             Tissue::Fat => (Some(-9.0), 0.63),
-            Tissue::Fascia => (Some(12.0), 0.8),
+            Tissue::Fascia => (Some(12.0), 1.57),
             Tissue::Muscle => (Some(0.0), 0.7),
             Tissue::VeinWall => (Some(4.0), 0.8),
             Tissue::VeinLumen => (Some(-50.0), 0.15),
