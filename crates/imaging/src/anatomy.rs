@@ -509,7 +509,10 @@ impl Anatomy {
     /// Writes into `out` the sorted depths (m, tissue coordinates) where the
     /// tissue may change along the column `u`, starting with 0 (the skin);
     /// returns how many. Between two consecutive breakpoints the tissue is
-    /// the same up to thin fascia lines (which attenuate like muscle).
+    /// the same (the attenuation takes one slope per segment, read at its
+    /// middle): the fascia lines (deep, intermuscular, muscle outlines) have
+    /// their own breakpoints, else a segment of muscle whose middle fell in
+    /// a line would take the line's slope over its whole length.
     pub fn column_breakpoints(&self, u: f64, out: &mut [f64; MAX_BREAKPOINTS]) -> usize {
         let c = &self.cfg;
         let mut n = 0;
@@ -522,6 +525,24 @@ impl Anatomy {
         push(0.0, &mut n);
         push(c.skin_thickness, &mut n);
         push(c.skin_thickness + c.fat_thickness, &mut n);
+        // The fascia lines, as `classify` draws them.
+        let half_line = 0.5 * c.fascia_thickness;
+        push(
+            c.skin_thickness + c.fat_thickness + c.fascia_thickness,
+            &mut n,
+        );
+        let inter = self.intermuscular_fascia(u);
+        push(inter - half_line, &mut n);
+        push(inter + half_line, &mut n);
+        for v in self.muscle_outlines() {
+            for grow in [half_line, -half_line] {
+                let (cm, hm) = v.chord(u, grow);
+                if hm > 0.0 {
+                    push(cm - hm, &mut n);
+                    push(cm + hm, &mut n);
+                }
+            }
+        }
         // Content boundaries inside vein lumens (see `VeinCondition::is_content`).
         for sv in &self.vessels {
             if let Some(vc) = sv.condition().filter(|vc| vc.fill > 0.0 && vc.fill < 1.0) {

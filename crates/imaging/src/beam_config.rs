@@ -37,6 +37,16 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields, default)]
 pub struct BeamConfig {
     /// One-way fractional bandwidth of the elements at −6 dB. Default 0.77.
+    ///
+    /// MUST documents its `param.bandwidth` (77 % for the L11-5v) as the
+    /// probe's *pulse-echo* −6 dB fractional bandwidth (`getpulse`,
+    /// `pfield`: the one-way response is its square root). Taken one way
+    /// here, the element response squared spans 0.77/√2 = 54 % at −6 dB, and
+    /// with the 2.5-cycle Hann burst the pulse-echo spectrum `S₀` spans
+    /// 45 % (computed from `crate::pulse`'s formulas). Matching MUST (one-way
+    /// 1.09) would give `S₀` 56 % and shorten the axial FWHM from ≈ 0.20 to
+    /// ≈ 0.165 mm (same computation, no attenuation), under the default
+    /// grid's 2.5 rows per FWHM; left for a change with the grid.
     pub bandwidth: f64,
     /// Cycles of the transmitted burst at the centre frequency, under a
     /// Hann envelope (`crate::pulse`). Default 2.5.

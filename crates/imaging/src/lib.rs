@@ -55,6 +55,8 @@ mod output;
 mod post_thrombotic;
 pub mod pressure;
 mod psf;
+#[cfg(test)]
+mod published_acoustics;
 mod pulse;
 mod render;
 mod reverberation;

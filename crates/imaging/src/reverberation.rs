@@ -9,16 +9,20 @@
 //! the round trip between the two (Szabo 2014, "Diagnostic Ultrasound
 //! Imaging: Inside Out", 2nd ed., ch. 10, reverberation artefacts). No
 //! published level was found for the thigh; the levels here follow from
-//! the reflection coefficients of the acoustic impedances (Duck 1990,
-//! "Physical Properties of Tissue", ch. 4: fat 1.38 MRayl, fibrous tissue,
-//! skin and muscle 1.6–1.7):
+//! the reflection coefficients of the acoustic impedances (published
+//! densities and speeds of sound, `src/published_acoustics.rs`, which
+//! tests the coefficients: fat 1.35–1.41 MRayl, muscle 1.59–1.69, dense
+//! collagen (tendon, ligament) 1.82–2.09, cortical bone 5.7–8.8):
 //!
 //! - **Near field**: between the probe's face and the skin, fat and fascia
 //!   echoes. A layer at image depth `z` repeats at `n z` (`n` = 2, 3) with
 //!   its echo times `(R_p R_i)^{n−1}`, `R_p` the face's reflection
-//!   (silicone lens, Z ≈ 1.0 MRayl, on skin: (1.6 − 1.0)/(1.6 + 1.0) ≈
-//!   0.23) and `R_i` the layer's (fibrous tissue on fat:
-//!   (1.7 − 1.38)/(1.7 + 1.38) ≈ 0.10): −33 dB per round trip. The copies
+//!   (an estimate: a silicone lens of Z ≈ 1.0 MRayl on skin,
+//!   (1.6 − 1.0)/(1.6 + 1.0) ≈ 0.23; no published reflection coefficient of
+//!   a probe's face was found, and the stack behind a thin lens may reflect
+//!   more) and `R_i` the layer's (fibrous tissue on fat ≈ 0.10, within the
+//!   published 0.060 (fat on muscle) to 0.214 (fat on collagen)): −33 dB
+//!   per round trip. The copies
 //!   are taken from the column's own echo above the deep fascia
 //!   ([`Reverberation::near_field`]), before the attenuation: the
 //!   reverberant path's round trip to `n z` is the length of the direct
@@ -106,8 +110,10 @@ pub const NEAR_ORDERS: usize = 3;
 /// Copies of a vessel's near wall drawn into its lumen.
 pub const LUMEN_ORDERS: usize = 2;
 /// Amplitude reflection coefficient of the bone's surface that sets the
-/// cortex's echo ([`crate::Tissue::Cortex`]: Z ≈ 7.4 against 1.6 MRayl).
-const BONE_REFLECTION: f64 = 0.64;
+/// cortex's echo ([`crate::Tissue::Cortex`]: Z ≈ 7.4 against 1.6 MRayl;
+/// published impedances of cortical bone and muscle give 0.545–0.693,
+/// `src/published_acoustics.rs`).
+pub(crate) const BONE_REFLECTION: f64 = 0.64;
 
 /// A vessel's lumen in one column of a frame (image depths, m).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -247,7 +253,9 @@ mod tests {
     #[test]
     fn levels_follow_the_reflection_coefficients() {
         let r = Reverberation::new(&ReverbConfig::default(), 7);
-        // (0.23 · 0.10)² per extra round trip: −32.8 dB.
+        // (0.23 · 0.10)² per extra round trip: −32.8 dB (R_i = 0.10 lies in
+        // the published 0.060–0.214 of `published_acoustics.rs`; R_p = 0.23
+        // is an estimate).
         let near = 20.0 * (r.near_gain[2] as f64).log10();
         assert!((near + 32.77).abs() < 0.05, "{near}");
         // +18.9 dB for the wall, −40 dB for the round trip.

@@ -27,8 +27,16 @@
 //! Levels (peak echo of a line facing the beam, dB re the mean speckle
 //! intensity of the muscle class at the same depth, before attenuation;
 //! the perimysium lines raise muscle's mean echo by ≈ 2 dB over its
-//! class): estimates for the white lines of clinical scans, listed on
-//! [`Interface`]. The
+//! class), listed on [`Interface`]: a specular echo scales as the
+//! interface's amplitude reflection coefficient `R`, and the model's scale
+//! is set by the femoral cortex, `R` = 0.64 at +35 dB ([`Tissue::Cortex`]),
+//! so a line of reflection `R` lies at `35 + 20 log₁₀(R/0.64)` dB. Published
+//! densities and speeds of sound (fat, muscle, tendon and ligament as dense
+//! collagen; `src/published_acoustics.rs`, which tests the levels) give
+//! `R` = 0.060 (fat on muscle) to 0.214 (fat on collagen): +14.4 to +25.5
+//! dB. The +35 dB anchor itself is an estimate (no published backscatter
+//! coefficient of thigh muscle at 7.5 MHz was found to set it absolutely).
+//! The
 //! amplitude of a reflector follows from the PSF tables: a line of
 //! reflectors of amplitude `A` one per column peaks at
 //! `A w_e Σ_k h_lat(k)` (`w_e` the elevation weight, the axial kernel's
@@ -58,8 +66,11 @@ pub(crate) use crate::scatterers::SPECULAR_LOBE;
 pub const INTIMA_MEDIA: f64 = 0.55e-3;
 
 /// Diffuse echo of the arterial media relative to muscle (dB): the
-/// hypoechoic band between the intima–media double line (smooth muscle,
-/// estimate; it reads dark between the two white lines on scans).
+/// hypoechoic band between the intima–media double line (smooth muscle; an
+/// estimate: the double line's pattern, lumen–intima and media–adventitia
+/// echoes around a dark media, is Pignoli et al. 1986, "Intimal plus medial
+/// thickness of the arterial wall: a direct measurement with ultrasound
+/// imaging", Circulation 74(6):1399, but no level of the media was found).
 const MEDIA_DB: f64 = -15.0;
 
 /// No neighbour (an interface's first or last column).
@@ -70,17 +81,22 @@ const NONE: u32 = u32::MAX;
 pub(crate) enum Interface {
     /// Deep fascia, intermuscular fascia, a muscle's outline: +20 dB, the
     /// brightest soft-tissue lines of the thigh (a sheet of dense collagen
-    /// between fat or muscle on each side).
+    /// between fat or muscle on each side): `R` ≈ 0.10, within the
+    /// published 0.060–0.214 (+14.4 to +25.5 dB; module docs).
     Fascia,
     /// Lumen–wall interface of a vein: +20 dB (the thin bright wall of a
-    /// patent vein, as bright as a fascia where it faces the beam).
+    /// patent vein, as bright as a fascia where it faces the beam: the
+    /// collagen-rich adventitia on perivascular fat, `R` ≈ 0.10, within the
+    /// published range of the module docs).
     VeinWall,
     /// Lumen–intima interface of an artery: +14 dB (the inner, thinner
-    /// line of the double line: blood to intima).
+    /// line of the double line: blood to intima). An estimate: no published
+    /// impedance of the intima was found; set 6 dB under the adventitia's
+    /// line, the weaker of the double line (Pignoli et al. 1986).
     Intima,
     /// Media–adventitia interface of an artery: +20 dB (the outer line of
     /// the double line, the brighter one: media to collagen-rich
-    /// adventitia).
+    /// adventitia, within the published range of the module docs).
     Adventitia,
 }
 
