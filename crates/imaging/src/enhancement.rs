@@ -31,7 +31,9 @@ pub(crate) struct LossBlur {
     pub half: usize,
     /// Each row's own half-width (columns).
     row_half: Vec<usize>,
-    /// `weights[i · (2K + 1) + k + K]`, normalized to sum 1 in each row.
+    /// `weights[(k + K) · rows + i]`, normalized to sum 1 in each row,
+    /// zero past the row's own half-width: by offset, so that a column's
+    /// rows are averaged offset after offset over contiguous rows.
     weights: Vec<f64>,
 }
 
@@ -52,14 +54,15 @@ impl LossBlur {
         let half = row_half.iter().copied().max().unwrap_or(0);
         let n = 2 * half + 1;
         let mut weights = vec![0.0; rows * n];
-        for (i, w) in weights.chunks_mut(n).enumerate() {
-            let h = row_half[i];
+        let mut w = vec![0.0; n];
+        for (i, &h) in row_half.iter().enumerate() {
+            w.fill(0.0);
             for (kk, wk) in w.iter_mut().enumerate().skip(half - h).take(2 * h + 1) {
                 *wk = intensity(kk as i64 - half as i64, i);
             }
             let sum: f64 = w.iter().sum();
-            if sum > 0.0 {
-                w.iter_mut().for_each(|x| *x /= sum);
+            for (kk, &wk) in w.iter().enumerate() {
+                weights[kk * rows + i] = if sum > 0.0 { wk / sum } else { wk };
             }
         }
         LossBlur {
@@ -69,6 +72,13 @@ impl LossBlur {
         }
     }
 
+    /// Weight of offset `k` columns (`|k| ≤ half`) in row `i`.
+    #[cfg(test)]
+    fn weight(&self, k: i64, i: usize) -> f64 {
+        let rows = self.row_half.len();
+        self.weights[(k + self.half as i64) as usize * rows + i]
+    }
+
     /// The loss of column `j` into `out` (one value per row) from the loss
     /// exponents of every column, `loss[c · rows + i]` (`columns =
     /// loss.len() / rows`; columns past the image's edges are taken as the
@@ -76,7 +86,17 @@ impl LossBlur {
     /// `margin` columns, reaches the nearest vessel margin `distance`
     /// columns away, from row `start` down (the vessels' top), the
     /// column's own elsewhere (its neighbours see the same loss there).
+    ///
+    /// The averaged rows lie between the first and the last row that
+    /// qualifies; they are summed offset after offset (`k` increasing from
+    /// a zero sum, over the largest of their half-widths) along contiguous
+    /// rows, which the compiler vectorizes, then the rows between that do
+    /// not qualify take their own loss back. Each row's sum adds the same
+    /// products in the same order as a sum over its own offsets: the terms
+    /// past its half-width have a zero weight, and adding `0 · x` (`x`
+    /// finite: a loss exponent) leaves a sum unchanged, `+0` included.
     #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
     pub fn column(
         &self,
         loss: &[f64],
@@ -88,21 +108,34 @@ impl LossBlur {
         out: &mut [f64],
     ) {
         let cols = loss.len() / rows;
-        let n = 2 * self.half + 1;
-        for (i, o) in out.iter_mut().enumerate().take(rows) {
-            let h = self.row_half[i];
-            if i < start || distance > (h + 1) as f64 + margin {
-                *o = loss[j * rows + i];
-                continue;
+        let out = &mut out[..rows];
+        let own = &loss[j * rows..(j + 1) * rows];
+        out.copy_from_slice(own);
+        let averaged = |i: usize| distance <= (self.row_half[i] + 1) as f64 + margin;
+        let start = start.min(rows);
+        let Some(a) = (start..rows).find(|&i| averaged(i)) else {
+            return;
+        };
+        let b = (a..rows).rfind(|&i| averaged(i)).map_or(a, |i| i + 1);
+        let h = (a..b)
+            .filter(|&i| averaged(i))
+            .map(|i| self.row_half[i])
+            .max()
+            .unwrap_or(0);
+        let span = &mut out[a..b];
+        span.fill(0.0);
+        for kk in self.half - h..=self.half + h {
+            let c = (j + kk).saturating_sub(self.half).min(cols - 1);
+            let w = &self.weights[kk * rows + a..kk * rows + b];
+            let x = &loss[c * rows + a..c * rows + b];
+            for ((o, &wk), &xk) in span.iter_mut().zip(w).zip(x) {
+                *o += wk * xk;
             }
-            let w = &self.weights[i * n..(i + 1) * n];
-            let mut acc = 0.0;
-            let first = self.half - h;
-            for (kk, &wk) in w.iter().enumerate().skip(first).take(2 * h + 1) {
-                let c = (j + kk).saturating_sub(self.half).min(cols - 1);
-                acc += wk * loss[c * rows + i];
+        }
+        for (i, o) in span.iter_mut().enumerate() {
+            if !averaged(a + i) {
+                *o = own[a + i];
             }
-            *o = acc;
         }
     }
 }
@@ -120,7 +153,9 @@ mod tests {
         let n = 2 * b.half + 1;
         assert!(b.half >= 1);
         let spread = |i: usize| {
-            let w = &b.weights[i * n..(i + 1) * n];
+            let w: Vec<f64> = (0..n as i64)
+                .map(|k| b.weight(k - b.half as i64, i))
+                .collect();
             assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-9);
             w.iter()
                 .enumerate()
@@ -139,5 +174,70 @@ mod tests {
         b.column(&loss, rows, cols / 2, 0.0, 0.0, 0, &mut out);
         let i = row(30e-3);
         assert!(out[i] < 0.0 && out[i] > -1.0, "{}", out[i]);
+    }
+
+    /// The average as first written, row after row over the row's own
+    /// offsets (strided through the columns): the reference the
+    /// offset-major [`LossBlur::column`] must equal bit for bit.
+    fn column_by_rows(
+        b: &LossBlur,
+        loss: &[f64],
+        rows: usize,
+        j: usize,
+        (distance, margin, start): (f64, f64, usize),
+    ) -> Vec<f64> {
+        let cols = loss.len() / rows;
+        (0..rows)
+            .map(|i| {
+                let h = b.row_half[i];
+                if i < start || distance > (h + 1) as f64 + margin {
+                    return loss[j * rows + i];
+                }
+                let mut acc = 0.0;
+                for k in -(h as i64)..=h as i64 {
+                    let c = (j as i64 + k).clamp(0, cols as i64 - 1) as usize;
+                    acc += b.weight(k, i) * loss[c * rows + i];
+                }
+                acc
+            })
+            .collect()
+    }
+
+    #[test]
+    fn offset_major_average_is_the_row_by_row_sum_bit_for_bit() {
+        let cfg = ImagingConfig::default();
+        let t = PsfTables::new(&cfg);
+        let b = LossBlur::new(&t, cfg.rows);
+        let rows = cfg.rows;
+        let cols = 3 * b.half + 7;
+        // Smooth but irregular exponents (Np), negative as losses are.
+        let loss: Vec<f64> = (0..cols * rows)
+            .map(|k| {
+                let (c, i) = ((k / rows) as f64, (k % rows) as f64);
+                -1e-3 * i - 0.3 * (0.7 * c + 0.01 * i).sin().abs()
+            })
+            .collect();
+        let mut out = vec![f64::NAN; rows];
+        let mut averaged = 0;
+        for j in [0, 1, b.half, cols / 2, cols - 2, cols - 1] {
+            // From every row averaged to none, through the partial cases
+            // where only the rows of the widest lobes are.
+            for distance in [0.0, 2.0, 3.5, 6.0, 1e3] {
+                for start in [0, rows / 3, rows] {
+                    let args = (distance, 0.5, start);
+                    b.column(&loss, rows, j, distance, 0.5, start, &mut out);
+                    let want = column_by_rows(&b, &loss, rows, j, args);
+                    for (i, (o, w)) in out.iter().zip(&want).enumerate() {
+                        assert_eq!(o.to_bits(), w.to_bits(), "row {i}, column {j}, {args:?}");
+                    }
+                    averaged += want
+                        .iter()
+                        .zip(&loss[j * rows..(j + 1) * rows])
+                        .filter(|(w, x)| w != x)
+                        .count();
+                }
+            }
+        }
+        assert!(averaged > rows, "the cases average rows: {averaged}");
     }
 }
