@@ -328,6 +328,52 @@ mod tests {
         assert_eq!(Percentiles::of(&mut []).count, 0);
     }
 
+    /// A tick that sleeps through three periods misses its deadline on the
+    /// wall clock without using the CPU (the scheduler's case); one that
+    /// computes for two periods of its own CPU time is over budget (the
+    /// computation's case). The thread clock is Linux's; elsewhere it reads 0
+    /// and nothing is over budget.
+    #[test]
+    fn missed_deadlines_tell_computation_from_waiting() {
+        let cfg = LoopConfig {
+            rate_hz: 1000.0,
+            ring_capacity: 16,
+            realtime_priority: false,
+        };
+        let period_ns = 1_000_000;
+        let stop = AtomicBool::new(false);
+        let mut sleeper = LoopRunner::new(&cfg).unwrap();
+        sleeper.run(&stop, Some(3), |_, _| {
+            std::thread::sleep(Duration::from_millis(3));
+        });
+        let s = sleeper.summary();
+        assert!(s.missed_deadlines >= 3, "{s:?}");
+        assert_eq!(s.missed_over_budget, 0, "{s:?}");
+        // Thread-CPU ≤ wall time on every tick.
+        assert!(sleeper
+            .timings()
+            .records()
+            .iter()
+            .all(|r| r.cpu_ns <= r.compute_ns));
+        let mut busy = LoopRunner::new(&cfg).unwrap();
+        busy.run(&stop, Some(3), |_, _| {
+            let start = thread_cpu_ns();
+            let mut x = 0u64;
+            // Two periods of this thread's own CPU time (bounded by a wall
+            // clock guard where the thread clock reads 0).
+            let wall = Instant::now();
+            while thread_cpu_ns() - start < 2 * period_ns && wall.elapsed().as_millis() < 20 {
+                x = x.wrapping_add(std::hint::black_box(x) | 1);
+            }
+            std::hint::black_box(x);
+        });
+        let s = busy.summary();
+        if cfg!(target_os = "linux") {
+            assert_eq!(s.missed_over_budget, 3, "{s:?}");
+            assert!(s.compute_cpu.median >= 2e-3, "{s:?}");
+        }
+    }
+
     #[test]
     fn ring_keeps_the_last_records() {
         let mut r = TimingRing::new(3);
