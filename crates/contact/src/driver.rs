@@ -259,6 +259,18 @@ impl ProbeContact {
         )
     }
 
+    /// The contact wrench on the probe at the model's current state, the
+    /// broad phase rebuilt on the current positions: the force and torque
+    /// [`Self::sample`] reports, without its queries (the `direct`
+    /// coupling's real-time tick renders only this). [`Self::advance`]'s
+    /// own wrench differs from it by the face samples' surfaces, found there
+    /// at the step's start (relative 1e-5 at contact onset). Allocation-free.
+    pub fn wrench_now(&mut self, model: &ThighModel) -> Wrench {
+        self.contact
+            .prepare(model.positions(), model.velocities(), 0.0);
+        self.contact.wrench(model.positions(), model.velocities())
+    }
+
     /// Steps with the probe held still at `pose` until every node is slower
     /// than `speed_tol` (m/s) or `max_steps` steps of `h` (s) were taken: the
     /// quasi-static equilibrium. Returns the steps taken and the last step.

@@ -4,6 +4,13 @@
 //! compute time and period error go into a preallocated ring, summarized
 //! afterwards (median, p99, p99.9, max, missed deadlines).
 //!
+//! Each tick's compute is timed twice: on the wall clock and on the thread's
+//! own CPU clock. On a shared machine the two tell a missed deadline's cause
+//! apart: a tick whose thread-CPU time exceeds the period could not have
+//! made it on any schedule (the computation is too long); one whose
+//! thread-CPU time fits but whose wall time does not was preempted or woke
+//! late (the scheduler).
+//!
 //! Schedule: deadlines `t_k = t_0 + k T`. The period error of tick `k` is its
 //! start time minus `t_k`. A deadline is missed when a tick ends after the
 //! next deadline `t_{k+1}`; if the loop falls more than one period behind it
@@ -20,8 +27,11 @@ use crate::config::{ConfigError, LoopConfig};
 /// One tick's timing, ns.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct TickTiming {
-    /// Time spent in the tick closure, ns.
+    /// Time spent in the tick closure, ns (wall clock).
     pub compute_ns: u32,
+    /// CPU time the loop's thread spent in the tick closure, ns (0 where the
+    /// platform has no thread clock).
+    pub cpu_ns: u32,
     /// Start time minus the deadline, ns (≥ 0 except for clock jitter).
     pub period_error_ns: i32,
 }
@@ -108,12 +118,20 @@ pub struct TimingSummary {
     pub ticks: u64,
     /// Target period, s.
     pub period: f64,
-    /// Compute time per tick (over the ring), s.
+    /// Compute time per tick (over the ring), s, wall clock.
     pub compute: Percentiles,
+    /// Thread-CPU time per tick (over the ring), s: the computation's own
+    /// cost, which other processes do not inflate.
+    pub compute_cpu: Percentiles,
     /// Absolute period error (start − deadline) per tick (over the ring), s.
     pub period_error: Percentiles,
     /// Deadlines missed (tick ended after the next deadline, or skipped).
     pub missed_deadlines: u64,
+    /// Missed deadlines of ticks whose thread-CPU time alone exceeded the
+    /// period (the computation too long); the rest of `missed_deadlines`
+    /// came from waiting for the CPU (preemption, late wake-up) or from the
+    /// deadlines skipped after a late tick.
+    pub missed_over_budget: u64,
     /// Missed deadlines per 10 000 ticks.
     pub missed_per_10k: f64,
     /// Whether real-time priority was obtained.
@@ -160,6 +178,13 @@ pub fn request_fifo(priority: thread_priority::ThreadPriority) -> bool {
     }
 }
 
+/// CPU time consumed by the calling thread so far (ns; 0 where the platform
+/// has no thread clock). One `clock_gettime(CLOCK_THREAD_CPUTIME_ID)`: no
+/// allocation, no lock.
+pub fn thread_cpu_ns() -> u64 {
+    cpu_time::ThreadTime::try_now().map_or(0, |t| t.as_duration().as_nanos() as u64)
+}
+
 /// Fixed-rate loop runner.
 pub struct LoopRunner {
     period: Duration,
@@ -168,6 +193,7 @@ pub struct LoopRunner {
     want_realtime: bool,
     ticks: u64,
     missed: u64,
+    missed_over_budget: u64,
 }
 
 impl LoopRunner {
@@ -181,6 +207,7 @@ impl LoopRunner {
             want_realtime: config.realtime_priority,
             ticks: 0,
             missed: 0,
+            missed_over_budget: 0,
         })
     }
 
@@ -204,18 +231,24 @@ impl LoopRunner {
             let deadline = t0 + self.period * k;
             sleeper.sleep_until(deadline);
             let start = Instant::now();
+            let cpu_start = thread_cpu_ns();
             tick((start - t0).as_secs_f64(), ran);
+            let cpu = thread_cpu_ns().saturating_sub(cpu_start);
             let end = Instant::now();
             let error = start.saturating_duration_since(deadline).as_nanos() as i64
                 - deadline.saturating_duration_since(start).as_nanos() as i64;
             self.ring.push(TickTiming {
                 compute_ns: (end - start).as_nanos().min(u32::MAX as u128) as u32,
+                cpu_ns: cpu.min(u64::from(u32::MAX)) as u32,
                 period_error_ns: error.clamp(i32::MIN as i64, i32::MAX as i64) as i32,
             });
             ran += 1;
             k += 1;
             if end > t0 + self.period * k {
                 self.missed += 1;
+                if cpu > self.period.as_nanos() as u64 {
+                    self.missed_over_budget += 1;
+                }
                 // Skip deadlines already past rather than bursting to catch up.
                 let behind = ((end - t0).as_secs_f64() / self.period.as_secs_f64()).ceil() as u32;
                 if behind > k {
@@ -256,6 +289,7 @@ impl LoopRunner {
     pub fn summary(&self) -> TimingSummary {
         let recs = self.ring.records();
         let mut compute: Vec<f64> = recs.iter().map(|r| r.compute_ns as f64 * 1e-9).collect();
+        let mut cpu: Vec<f64> = recs.iter().map(|r| r.cpu_ns as f64 * 1e-9).collect();
         let mut error: Vec<f64> = recs
             .iter()
             .map(|r| (r.period_error_ns as f64 * 1e-9).abs())
@@ -264,8 +298,10 @@ impl LoopRunner {
             ticks: self.ticks,
             period: self.period.as_secs_f64(),
             compute: Percentiles::of(&mut compute),
+            compute_cpu: Percentiles::of(&mut cpu),
             period_error: Percentiles::of(&mut error),
             missed_deadlines: self.missed,
+            missed_over_budget: self.missed_over_budget,
             missed_per_10k: if self.ticks > 0 {
                 self.missed as f64 * 1e4 / self.ticks as f64
             } else {
@@ -292,12 +328,59 @@ mod tests {
         assert_eq!(Percentiles::of(&mut []).count, 0);
     }
 
+    /// A tick that sleeps through three periods misses its deadline on the
+    /// wall clock without using the CPU (the scheduler's case); one that
+    /// computes for two periods of its own CPU time is over budget (the
+    /// computation's case). The thread clock is Linux's; elsewhere it reads 0
+    /// and nothing is over budget.
+    #[test]
+    fn missed_deadlines_tell_computation_from_waiting() {
+        let cfg = LoopConfig {
+            rate_hz: 1000.0,
+            ring_capacity: 16,
+            realtime_priority: false,
+        };
+        let period_ns = 1_000_000;
+        let stop = AtomicBool::new(false);
+        let mut sleeper = LoopRunner::new(&cfg).unwrap();
+        sleeper.run(&stop, Some(3), |_, _| {
+            std::thread::sleep(Duration::from_millis(3));
+        });
+        let s = sleeper.summary();
+        assert!(s.missed_deadlines >= 3, "{s:?}");
+        assert_eq!(s.missed_over_budget, 0, "{s:?}");
+        // Thread-CPU ≤ wall time on every tick.
+        assert!(sleeper
+            .timings()
+            .records()
+            .iter()
+            .all(|r| r.cpu_ns <= r.compute_ns));
+        let mut busy = LoopRunner::new(&cfg).unwrap();
+        busy.run(&stop, Some(3), |_, _| {
+            let start = thread_cpu_ns();
+            let mut x = 0u64;
+            // Two periods of this thread's own CPU time (bounded by a wall
+            // clock guard where the thread clock reads 0).
+            let wall = Instant::now();
+            while thread_cpu_ns() - start < 2 * period_ns && wall.elapsed().as_millis() < 20 {
+                x = x.wrapping_add(std::hint::black_box(x) | 1);
+            }
+            std::hint::black_box(x);
+        });
+        let s = busy.summary();
+        if cfg!(target_os = "linux") {
+            assert_eq!(s.missed_over_budget, 3, "{s:?}");
+            assert!(s.compute_cpu.median >= 2e-3, "{s:?}");
+        }
+    }
+
     #[test]
     fn ring_keeps_the_last_records() {
         let mut r = TimingRing::new(3);
         for i in 0..5 {
             r.push(TickTiming {
                 compute_ns: i,
+                cpu_ns: 0,
                 period_error_ns: 0,
             });
         }

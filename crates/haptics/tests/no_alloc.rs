@@ -59,6 +59,7 @@ fn tick_and_update_do_not_allocate() {
             checksum += f.norm();
             ring.push(TickTiming {
                 compute_ns: i,
+                cpu_ns: 0,
                 period_error_ns: 0,
             });
         }

@@ -125,6 +125,9 @@ pub fn run_client<D: TickDevice + Send + 'static>(
         direct_physics,
     } = parts;
     let mut tick = HapticTick::new(device, source, scale, direct_physics, period);
+    // Real time: the `direct` tick renders the force only, within its period
+    // (its physics records are not kept here).
+    tick.set_direct_queries(false);
     tick.set_orientation(orientation);
     let mut observer = HandoffObserver::new(pose_in, ticks);
     let handle = std::thread::Builder::new()

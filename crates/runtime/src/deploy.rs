@@ -15,6 +15,7 @@ use crate::live::CouplingMode;
 use crate::scenario::Scenario;
 use anyhow::{Context, Result};
 use echothigh_device::{ExamScript, SimulatedDevice, SimulatedHand};
+use echothigh_haptics::TimingSummary;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
@@ -44,6 +45,8 @@ pub struct RunStats {
     pub link_dropped: u64,
     /// Records the recorder's rings could not take (0 unless the disk stalled for seconds).
     pub dropped_records: u64,
+    /// The haptic loop's timing (zeros on the virtual clock).
+    pub loop_timing: TimingSummary,
 }
 
 /// Where a run's records end up.
@@ -139,6 +142,7 @@ fn run_virtual_with(
         faults,
         link_dropped: a.rejected() + b.rejected(),
         dropped_records: 0,
+        loop_timing: TimingSummary::default(),
     };
     Ok(RunOutput {
         ticks,
@@ -199,6 +203,7 @@ pub fn run_threads_on<D: TickDevice + Send + 'static>(
                 faults: report.faults,
                 link_dropped: 0,
                 dropped_records: report.dropped,
+                loop_timing: report.timing,
             },
             end: client_end(report.end),
             ticks: report.ticks,
@@ -249,6 +254,7 @@ pub fn run_threads_on<D: TickDevice + Send + 'static>(
             faults: report.faults,
             link_dropped: report.link.rejected(),
             dropped_records: report.dropped + steps.dropped(),
+            loop_timing: report.timing,
         },
         end: client_end(report.end),
         ticks: report.ticks,
@@ -300,6 +306,10 @@ pub fn summarize(
         duration: span,
         ticks: ticks.len() as u64,
         missed_deadlines: stats.missed_deadlines,
+        missed_over_budget: stats.loop_timing.missed_over_budget,
+        tick_compute: stats.loop_timing.compute,
+        tick_cpu: stats.loop_timing.compute_cpu,
+        realtime_priority: stats.loop_timing.realtime_priority,
         haptic_rate,
         physics_steps: steps.len() as u64,
         physics_rate: if scenario.coupling.mode == CouplingMode::Direct {

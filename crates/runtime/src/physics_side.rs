@@ -6,7 +6,7 @@
 use super::trace::PhysicsRecord;
 use crate::scenario::Scenario;
 use anyhow::Result;
-use echothigh_contact::{HapticSample, ProbeContact, SurfaceDistance, SurfaceGrid};
+use echothigh_contact::{HapticSample, Probe, ProbeContact, SurfaceDistance, SurfaceGrid};
 use echothigh_model::ThighModel;
 use echothigh_transport::{ProbeMsg, SampleMsg};
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
@@ -97,6 +97,58 @@ impl PhysicsSide {
             },
         };
         (msg, rec)
+    }
+
+    /// One physics step of `h` (s) at physics time `t` (s) with the probe
+    /// where `probe` says, *without* the haptic queries: implicit Euler with
+    /// contact (the same step as [`Self::step`], which runs these very
+    /// stages before its queries), and the contact force at the step's end
+    /// ([`ProbeContact::wrench_now`], as the queries evaluate it).
+    /// What `direct` coupling renders in real time, where the tick must fit
+    /// its 1 ms and the force is all it displays: the stiffness query's
+    /// solve alone costs more than the step on the whole-leg mesh (issue 18).
+    /// The sample kept for [`Self::last_sample`] has that force and torque;
+    /// its `D` is +∞ and its `k` 0 (not computed), and so are the record's.
+    /// The force is [`Self::step`]'s to the bit (the queries only read the
+    /// model; `tests/direct_force_only.rs`).
+    /// Returns the force on the probe (N) and the step's record.
+    /// Allocation-free.
+    pub fn step_force(
+        &mut self,
+        probe: &ProbeMsg,
+        h: f64,
+        t: f64,
+    ) -> (Vector3<f64>, PhysicsRecord) {
+        let pose = probe_pose(probe);
+        let (mut physics, _) = self.contact.advance(&mut self.model, &pose, h);
+        let clock = std::time::Instant::now();
+        let wrench = self.contact.wrench_now(&self.model);
+        physics.timings.broad_phase += clock.elapsed().as_secs_f64();
+        let p = Probe::reference_point(&pose);
+        let gradient = -Probe::contact_direction(&pose);
+        self.last = Some(HapticSample {
+            p,
+            distance: f64::INFINITY,
+            gradient,
+            stiffness: 0.0,
+            force: wrench.force,
+            torque: wrench.torque,
+            in_contact: wrench.samples > 0,
+        });
+        let rec = PhysicsRecord {
+            t,
+            probe: p.into(),
+            distance: f64::INFINITY,
+            gradient: gradient.into(),
+            stiffness: 0.0,
+            force: wrench.force.into(),
+            newton_iterations: physics.newton_iterations,
+            cg_iterations: physics.cg_iterations,
+            limited: physics.limited,
+            compute_time: 0.0,
+            stages: physics.timings,
+        };
+        (wrench.force, rec)
     }
 
     /// The state checkpoint after a step: an error naming the node and the

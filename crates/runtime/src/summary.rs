@@ -1,5 +1,6 @@
 //! The JSON summary of a run, and where runs are written by default.
 
+use echothigh_haptics::Percentiles;
 use serde::Serialize;
 use std::path::PathBuf;
 
@@ -16,6 +17,19 @@ pub struct Summary {
     pub ticks: u64,
     /// Ticks whose compute or wake-up missed the 1 ms deadline (0 on the virtual clock).
     pub missed_deadlines: u64,
+    /// Of those, the ticks whose thread-CPU time alone exceeded the period:
+    /// too long a computation; the others waited for the CPU (preempted or
+    /// woken late on a busy machine) or were skipped after a late tick.
+    pub missed_over_budget: u64,
+    /// Wall-clock compute time of a haptic tick (s; over the loop's timing
+    /// ring, the last 65 536 ticks by default; zeros on the virtual clock).
+    pub tick_compute: Percentiles,
+    /// Thread-CPU time of a haptic tick (s; same ticks): in `direct`
+    /// coupling, the physics step's own cost per tick.
+    pub tick_cpu: Percentiles,
+    /// Whether the haptic loop's thread got real-time (FIFO) priority; without
+    /// it a busy machine's other processes preempt the tick.
+    pub realtime_priority: bool,
     /// Haptic rate achieved (Hz).
     pub haptic_rate: f64,
     /// Physics steps run.

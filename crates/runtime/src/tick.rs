@@ -135,6 +135,7 @@ pub struct HapticTick<D> {
     source: ForceSource,
     scale: ForceScale,
     direct: Option<PhysicsSide>,
+    direct_queries: bool,
     period: f64,
     orientation: [f64; 4],
     counters: TickCounters,
@@ -156,6 +157,7 @@ impl<D: TickDevice> HapticTick<D> {
             source,
             scale,
             direct,
+            direct_queries: true,
             period,
             orientation: EXAM_ORIENTATION,
             counters: TickCounters::default(),
@@ -179,12 +181,17 @@ impl<D: TickDevice> HapticTick<D> {
         // 2. Compute the force.
         let rendered = match self.direct.as_mut() {
             Some(physics) => {
-                let (sample, mut step) = physics.step(&probe, self.period, now);
+                let (force, mut step) = if self.direct_queries {
+                    let (sample, step) = physics.step(&probe, self.period, now);
+                    (Vec3::from(sample.force), step)
+                } else {
+                    physics.step_force(&probe, self.period, now)
+                };
                 // A diverged model ends the run with an error naming the node.
                 physics.check()?;
                 step.t = now;
                 observer.on_physics_step(physics, &probe, &step);
-                self.source.direct(Vec3::from(sample.force), p, now)
+                self.source.direct(force, p, now)
             }
             None => self.source.tick(p, now),
         };
@@ -212,6 +219,17 @@ impl<D: TickDevice> HapticTick<D> {
         self.counters.faults += u64::from(rendered.fault);
         observer.on_tick(&record);
         Ok(rendered)
+    }
+
+    /// Whether the `direct` physics also answers the haptic queries (`D`,
+    /// `∇D`, `k`) every tick: true by default (the virtual clock records
+    /// them: the stability analysis reads `k` off the `direct` trace). The
+    /// real-time deployments turn them off: the tick renders only the force,
+    /// and on the whole-leg mesh the stiffness query's solve costs more than
+    /// the step itself (issue 18), so with it the tick overran its 1 ms. The
+    /// force is the same either way ([`PhysicsSide::step_force`]).
+    pub fn set_direct_queries(&mut self, on: bool) {
+        self.direct_queries = on;
     }
 
     /// Commands zero force: every loop calls it on its way out, whatever

@@ -4,7 +4,8 @@
 //! thread (`client::exchange`) and a physics thread (`physics_loop`) run
 //! the other side over the in-process link, exactly as `run_threads` wires
 //! them. 100 000 ticks in `buffer` and `hold`, 20 000 in `direct` (which steps
-//! the physics inside every tick). The counting allocator counts this thread only, so the
+//! the physics inside every tick), both with the haptic queries (the virtual
+//! clock's tick) and without (the real-time deployments' force-only tick). The counting allocator counts this thread only, so the
 //! link and physics threads may allocate without being counted (they are
 //! not real-time). One test function so that nothing else runs on this
 //! thread while counting.
@@ -38,9 +39,10 @@ fn ticks_for(mode: CouplingMode) -> u32 {
     }
 }
 
-/// Runs `TICKS` ticks in `mode`; returns (allocations on the tick's
-/// thread, ticks with contact force, peak force in N).
-fn ticks_allocate(mode: CouplingMode) -> (u64, u64, f64) {
+/// Runs `TICKS` ticks in `mode` (in `direct`, with the haptic queries or
+/// without); returns (allocations on the tick's thread, ticks with contact
+/// force, peak force in N).
+fn ticks_allocate(mode: CouplingMode, direct_queries: bool) -> (u64, u64, f64) {
     let mut s = Scenario::default();
     s.coupling.mode = mode;
     s.run.duration = 120.0;
@@ -58,6 +60,7 @@ fn ticks_allocate(mode: CouplingMode) -> (u64, u64, f64) {
     let direct = (mode == CouplingMode::Direct).then(|| PhysicsSide::new(&s).unwrap());
     let period = s.coupling.haptic_period();
     let mut tick = HapticTick::new(device, source, s.device.force_scale(), direct, period);
+    tick.set_direct_queries(direct_queries);
     let (pose_in, mut pose_out) = triple_buffer::triple_buffer(&None::<ProbeMsg>);
     let (producer, mut consumer) = rtrb::RingBuffer::new(1 << 14);
     let mut observer = HandoffObserver::new(pose_in, RecordSink::Ring(producer, 0));
@@ -122,23 +125,24 @@ fn ticks_allocate(mode: CouplingMode) -> (u64, u64, f64) {
 
 #[test]
 fn the_tick_allocates_nothing_in_any_coupling_mode() {
-    for mode in [
-        CouplingMode::Buffer,
-        CouplingMode::Hold,
-        CouplingMode::Direct,
+    for (mode, queries) in [
+        (CouplingMode::Buffer, true),
+        (CouplingMode::Hold, true),
+        (CouplingMode::Direct, true),
+        (CouplingMode::Direct, false),
     ] {
-        let (n, contact, peak) = ticks_allocate(mode);
+        let (n, contact, peak) = ticks_allocate(mode, queries);
         assert_eq!(
             n,
             0,
-            "{mode:?}: {n} allocations in {} ticks",
+            "{mode:?} (queries {queries}): {n} allocations in {} ticks",
             ticks_for(mode)
         );
         // The test must exercise contact (the hand presses 12 mm in); its
         // force is not the subject here.
         assert!(
             contact > 0 && peak > 1.0,
-            "{mode:?}: no contact (peak {peak} N)"
+            "{mode:?} (queries {queries}): no contact (peak {peak} N)"
         );
     }
 }

@@ -3,6 +3,7 @@
 pub mod clock;
 pub mod contact;
 pub mod device_tick;
+pub mod direct_compare;
 pub mod doppler;
 pub mod haptics;
 pub mod haptics_cases;

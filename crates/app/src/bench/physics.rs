@@ -59,6 +59,15 @@ pub struct Args {
     /// (`reference-queries`: only the contact case differs).
     #[arg(long, value_enum, default_value = "scalar")]
     baseline: super::physics_compare::Baseline,
+    /// The probe in the contact case of `--compare`: held 10 mm in, or
+    /// moving between 10 and 0 mm at 1 Hz.
+    #[arg(long, value_enum, default_value = "held")]
+    contact_motion: super::physics_compare::ContactMotion,
+    /// Ticks of the `direct` tick's A/B instead (the built-in scenario's
+    /// exam, the real-time force-only tick against the tick with the haptic
+    /// queries, interleaved; 0: not run).
+    #[arg(long, default_value_t = 0)]
+    direct_ticks: usize,
     /// Rounds of the active window's A/B (10k press with and without the
     /// window, alternated; 0 skips it).
     #[arg(long, default_value_t = 3)]
@@ -72,6 +81,9 @@ pub struct Args {
 pub fn run(args: Args) -> anyhow::Result<()> {
     if !(args.steps_scale.is_finite() && args.steps_scale > 0.0) {
         anyhow::bail!("--steps-scale must be > 0, got {}", args.steps_scale);
+    }
+    if args.direct_ticks > 0 {
+        return run_direct(&args);
     }
     if args.compare {
         return run_compare(&args);
@@ -205,11 +217,17 @@ fn run_compare(args: &Args) -> anyhow::Result<()> {
         cases.push(r);
     }
     if args.contact_steps > 0 {
-        let r = compare_contact(args.contact_steps, args.baseline)?;
+        let r = compare_contact(args.contact_steps, args.baseline, args.contact_motion)?;
         print(&r);
         if let Some([[ns, nq], [os, oq]]) = r.step_and_queries_cpu_median_us {
             eprintln!(
                 "contact CPU medians µs: new step {ns:.1} + queries {nq:.1}, old step {os:.1} + queries {oq:.1}"
+            );
+        }
+        if let Some([n, o]) = r.stiffness_unassembled {
+            eprintln!(
+                "stiffness queries with no assembly: new {n}, old {o} of {} ({:?} probe)",
+                r.steps, args.contact_motion
             );
         }
         cases.push(r);
@@ -221,6 +239,37 @@ fn run_compare(args: &Args) -> anyhow::Result<()> {
         "old": args.baseline,
         "new": "edge_simd",
         "cases": cases,
+    });
+    let text = serde_json::to_string_pretty(&json)?;
+    if let Some(path) = &args.out {
+        std::fs::write(path, &text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    if args.json {
+        println!("{text}");
+    }
+    Ok(())
+}
+
+fn run_direct(args: &Args) -> anyhow::Result<()> {
+    let r = super::direct_compare::compare_direct(args.direct_ticks)?;
+    for (name, c) in [
+        ("force only", &r.force_only),
+        ("with queries", &r.with_queries),
+    ] {
+        eprintln!(
+            "direct tick, {name:<12} ({} nodes, {} ticks): thread-CPU median {:.1} µs, p99 {:.1}, max {:.1}; {} ticks over 1 ms",
+            r.nodes, r.ticks, c.median_us, c.p99_us, c.max_us, c.over_period
+        );
+    }
+    eprintln!(
+        "median ratio (with queries / force only) {:.2}; largest force gap {:.1e} N",
+        r.median_ratio, r.max_force_gap_n
+    );
+    let json = serde_json::json!({
+        "bench": "physics_direct_tick",
+        "profile": if cfg!(debug_assertions) { "debug" } else { "release" },
+        "threads": 1,
+        "direct": r,
     });
     let text = serde_json::to_string_pretty(&json)?;
     if let Some(path) = &args.out {

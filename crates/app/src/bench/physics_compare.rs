@@ -86,12 +86,43 @@ pub struct CompareReport {
     pub max_position_gap_m: f64,
     /// Mean PCG iterations per step, default system / baseline.
     pub cg_iterations_mean: [f64; 2],
+    /// Contact case: how the probe moved while measured.
+    pub motion: Option<ContactMotion>,
+    /// Contact case: measured steps whose stiffness query returned its warm
+    /// start checked matrix-free, with no assembly
+    /// ([`echothigh_contact::QueryStats::stiffness_unassembled`]), default
+    /// system then baseline.
+    pub stiffness_unassembled: Option<[u64; 2]>,
+}
+
+/// How the probe moves in the contact case of `--compare`, after its 0.5 s
+/// ramp to 10 mm.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactMotion {
+    /// Held 10 mm in.
+    Held,
+    /// Pressing and releasing between 10 and 0 mm at 1 Hz
+    /// (`d = 5 mm · (1 + cos 2π t)`): the stiffness query's warm start
+    /// rarely passes its stop test while the probe moves.
+    Moving,
+}
+
+impl ContactMotion {
+    /// Indentation (m) at `t` (s) after the ramp.
+    pub fn depth(self, t: f64) -> f64 {
+        match self {
+            ContactMotion::Held => 0.010,
+            ContactMotion::Moving => 0.005 * (1.0 + (std::f64::consts::TAU * t).cos()),
+        }
+    }
 }
 
 /// Per-form measurements.
 #[derive(Default)]
 struct Side {
     cpu: Vec<f64>,
+    unassembled: u64,
     step_cpu: Vec<f64>,
     query_cpu: Vec<f64>,
     stages: Vec<StepTimings>,
@@ -149,6 +180,8 @@ fn report(
             new.cg as f64 / steps.max(1) as f64,
             old.cg as f64 / steps.max(1) as f64,
         ],
+        motion: None,
+        stiffness_unassembled: split.map(|_| [new.unassembled, old.unassembled]),
     }
 }
 
@@ -192,10 +225,15 @@ pub fn compare_press(
     Ok(report("press", models[0].node_count(), new, old, max_gap))
 }
 
-/// The default mesh with the probe pressed 10 mm (after a 0.5 s ramp) and
-/// the haptic queries after every step, both systems interleaved; the
-/// time of a step is the physics step plus its queries (each also apart).
-pub fn compare_contact(steps: usize, baseline: Baseline) -> anyhow::Result<CompareReport> {
+/// The default mesh with the probe pressed 10 mm (after a 0.5 s ramp),
+/// then held or moving ([`ContactMotion`]), and the haptic queries after
+/// every step, both systems interleaved; the time of a step is the physics
+/// step plus its queries (each also apart).
+pub fn compare_contact(
+    steps: usize,
+    baseline: Baseline,
+    motion: ContactMotion,
+) -> anyhow::Result<CompareReport> {
     let config = ModelConfig::default();
     let h = config.integrator.time_step;
     let top = config.thigh.semi_axis_y;
@@ -211,7 +249,11 @@ pub fn compare_contact(steps: usize, baseline: Baseline) -> anyhow::Result<Compa
     let mut sides = [Side::default(), Side::default()];
     let mut max_gap = 0.0f64;
     for i in 1..=ramp + steps {
-        let depth = 0.010 * (i.min(ramp) as f64 / ramp as f64);
+        let depth = if i <= ramp {
+            0.010 * (i as f64 / ramp as f64)
+        } else {
+            motion.depth((i - ramp) as f64 * h)
+        };
         let order = if i % 2 == 0 { [0, 1] } else { [1, 0] };
         for k in order {
             // ProbeContact::step is advance then sample, timed apart.
@@ -225,10 +267,13 @@ pub fn compare_contact(steps: usize, baseline: Baseline) -> anyhow::Result<Compa
                 sides[k].record(c2 - c0, &s);
                 sides[k].step_cpu.push(c1 - c0);
                 sides[k].query_cpu.push(c2 - c1);
+                sides[k].unassembled += u64::from(query.stiffness_unassembled);
             }
         }
         max_gap = max_gap.max(gap(&models[0], &models[1]));
     }
     let [new, old] = sides;
-    Ok(report("contact", models[0].node_count(), new, old, max_gap))
+    let mut r = report("contact", models[0].node_count(), new, old, max_gap);
+    r.motion = Some(motion);
+    Ok(r)
 }

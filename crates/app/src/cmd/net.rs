@@ -345,6 +345,7 @@ pub fn client(args: ClientArgs) -> Result<()> {
             faults: report.faults,
             link_dropped: report.link.rejected(),
             dropped_records: report.dropped,
+            loop_timing: report.timing,
         },
         end: client_end(report.end),
     };

@@ -153,6 +153,20 @@ fn report(dir: &Path, s: &Summary) {
         s.peak_force,
         s.peak_device_force
     );
+    if s.tick_cpu.count > 0 {
+        let us = |x: f64| x * 1e6;
+        println!(
+            "tick thread-CPU median {:.0} µs, p99 {:.0} µs, max {:.0} µs (wall {:.0} / {:.0} / {:.0} µs); \
+             {} of the missed deadlines had a tick over the period in thread-CPU time",
+            us(s.tick_cpu.median),
+            us(s.tick_cpu.p99),
+            us(s.tick_cpu.max),
+            us(s.tick_compute.median),
+            us(s.tick_compute.p99),
+            us(s.tick_compute.max),
+            s.missed_over_budget
+        );
+    }
 }
 
 /// A run that diverged, lost its peer or was interrupted exits non-zero,

@@ -236,7 +236,9 @@ pub(super) fn start_session(
     let period = 1.0 / loop_cfg.rate_hz;
     let observer = LiveObserver::new(pos_in, status_in, publisher, period);
     if let (Some(hw), Some(device_in), Some(skin)) = (hardware.take(), device_in, skin) {
-        let tick = HapticTick::new(hw, source, scale, direct_physics.take(), period);
+        let mut tick = HapticTick::new(hw, source, scale, direct_physics.take(), period);
+        // Real time: the `direct` tick renders the force only (its 1 ms).
+        tick.set_direct_queries(false);
         let device_loop = DeviceLoop::new(tick, observer, skin, device_in, target.orientation);
         let haptic = hardware_loop::spawn(
             device_loop,
@@ -257,6 +259,7 @@ pub(super) fn start_session(
     }
     let mut observer = observer;
     let mut tick = HapticTick::new(device, source, scale, direct_physics.take(), period);
+    tick.set_direct_queries(false);
     if exam {
         tick.set_orientation(scenario.probe_orientation()?);
     }
