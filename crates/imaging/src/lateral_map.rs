@@ -138,7 +138,11 @@ impl LateralMap {
     /// per bin, image row `i` at `pad + i`; bin `b` at lateral
     /// `u_first + b dx`, m): in each row it moves anything in, each bin of
     /// the map's span takes its source's nearest bin times `√(dx_s/dx)`.
-    /// `scratch` holds one row of bins (nothing allocated).
+    /// The span's columns are first copied into `scratch` (over the rows
+    /// the map moves), then written back column by column: each column
+    /// reads and writes its rows in order (a first version went row by
+    /// row, a cache line per column for every row: it measured ≈ 2 ms more
+    /// splat stage at 512 × 864). Nothing is allocated.
     #[allow(clippy::too_many_arguments)]
     pub fn remap(
         &self,
@@ -149,10 +153,11 @@ impl LateralMap {
         dz: f64,
         u_first: f64,
         dx: f64,
-        scratch: &mut [[f32; 2]],
+        scratch: &mut RemapScratch,
     ) {
         let bins = rf.len() / padded_rows;
-        if bins == 0 {
+        let range = self.rows(dz, rows.min(scratch.rows.len()));
+        if bins == 0 || range.is_empty() {
             return;
         }
         let last = bins - 1;
@@ -165,37 +170,89 @@ impl LateralMap {
         let b1 = b1 as usize;
         // Sources lie in the span; rounding reaches one bin further.
         let (c0, c1) = (b0.saturating_sub(1), (b1 + 1).min(last));
-        let copy = &mut scratch[..c1 - c0 + 1];
-        for i in self.rows(dz, rows) {
-            let w = self.weight((i as f64 + 0.5) * dz);
-            if w <= 0.0 {
-                continue;
-            }
-            let t = self.targets(w);
-            // Per segment: dx_s/dx and its square root (the density factor).
-            let mut ratio = [1.0f64; 5];
-            let mut gain = [1.0f32; 5];
-            for k in 0..5 {
-                let len = t[k + 1] - t[k];
-                if len > 0.0 {
-                    ratio[k] = (self.s[k + 1] - self.s[k]) / len;
-                    gain[k] = ratio[k].sqrt() as f32;
+        let (r0, n) = (range.start, range.len());
+        if (c1 - c0 + 1) * n > scratch.region.len() {
+            return; // not reached: the renderer's scratch holds every bin's rows
+        }
+        let maps = &mut scratch.rows[..n];
+        for (m, row) in maps.iter_mut().enumerate() {
+            *row = RowMap::new(self, self.weight(((r0 + m) as f64 + 0.5) * dz));
+        }
+        let region = &mut scratch.region[..(c1 - c0 + 1) * n];
+        for (c, copy) in region.chunks_mut(n).enumerate() {
+            let start = (c0 + c) * padded_rows + pad + r0;
+            copy.copy_from_slice(&rf[start..start + n]);
+        }
+        for b in b0..=b1 {
+            let r = u_first + b as f64 * dx - self.x0;
+            let start = b * padded_rows + pad + r0;
+            let column = &mut rf[start..start + n];
+            for (m, (out, row)) in column.iter_mut().zip(maps.iter_mut()).enumerate() {
+                if row.w <= 0.0 {
+                    continue;
                 }
-            }
-            for (c, v) in copy.iter_mut().enumerate() {
-                *v = rf[(c0 + c) * padded_rows + pad + i];
-            }
-            let mut k = 0;
-            for b in b0..=b1 {
-                let r = u_first + b as f64 * dx - self.x0;
-                while k < 4 && r >= t[k + 1] {
-                    k += 1;
+                while row.k < 4 && r >= row.t[row.k + 1] {
+                    row.k += 1;
                 }
-                let xs = self.s[k] + (r - t[k]) * ratio[k];
+                let k = row.k;
+                let xs = self.s[k] + (r - row.t[k]) * row.ratio[k];
                 let src = ((xs + self.x0 - u_first) / dx).round().max(c0 as f64) as usize;
-                let v = copy[src.min(c1) - c0];
-                rf[b * padded_rows + pad + i] = [v[0] * gain[k], v[1] * gain[k]];
+                let v = region[(src.min(c1) - c0) * n + m];
+                *out = [v[0] * row.gain[k], v[1] * row.gain[k]];
             }
+        }
+    }
+}
+
+/// The map in one image row: its weight, the knots' images, and per
+/// segment `dx_s/dx` and its square root (the density factor).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct RowMap {
+    w: f64,
+    t: [f64; 6],
+    ratio: [f64; 5],
+    gain: [f32; 5],
+    /// The segment the column walk has reached.
+    k: usize,
+}
+
+impl RowMap {
+    fn new(map: &LateralMap, w: f64) -> Self {
+        let t = map.targets(w);
+        let mut ratio = [1.0f64; 5];
+        let mut gain = [1.0f32; 5];
+        for k in 0..5 {
+            let len = t[k + 1] - t[k];
+            if len > 0.0 {
+                ratio[k] = (map.s[k + 1] - map.s[k]) / len;
+                gain[k] = ratio[k].sqrt() as f32;
+            }
+        }
+        RowMap {
+            w,
+            t,
+            ratio,
+            gain,
+            k: 0,
+        }
+    }
+}
+
+/// Work memory of [`LateralMap::remap`], allocated once for a frame size.
+#[derive(Debug, Clone)]
+pub(crate) struct RemapScratch {
+    /// A copy of the moved columns' rows.
+    region: Vec<[f32; 2]>,
+    /// The map in each row.
+    rows: Vec<RowMap>,
+}
+
+impl RemapScratch {
+    /// For `bins` columns of `rows` image rows.
+    pub fn new(bins: usize, rows: usize) -> Self {
+        RemapScratch {
+            region: vec![[0.0; 2]; bins * rows],
+            rows: vec![RowMap::default(); rows],
         }
     }
 }
@@ -287,7 +344,7 @@ mod tests {
         let u_first = -0.03;
         // Each bin's echo is its index: the remap's source is readable.
         let mut rf: Vec<[f32; 2]> = (0..bins * pr).map(|n| [(n / pr) as f32, 0.0]).collect();
-        let mut scratch = vec![[0.0f32; 2]; bins];
+        let mut scratch = RemapScratch::new(bins, rows);
         m.remap(&mut rf, pr, pad, rows, dz, u_first, dx, &mut scratch);
         for i in [0, 300, 500, 631, 700, 899] {
             let z = (i as f64 + 0.5) * dz;

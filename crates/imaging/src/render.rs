@@ -17,7 +17,7 @@ use crate::deformation::{column_depth, SectionDeformation};
 use crate::edge_shadow::EdgeShadows;
 use crate::enhancement::LossBlur;
 use crate::error::ImagingError;
-use crate::lateral_map::LateralMap;
+use crate::lateral_map::{LateralMap, RemapScratch};
 use crate::material::MaterialWindow;
 use crate::pressure::stress_under_rectangle;
 use crate::psf::PsfTables;
@@ -176,8 +176,8 @@ pub struct Renderer {
     /// ([`crate::lateral_map`]; the first `map_count`).
     lateral_maps: [LateralMap; MAX_VESSELS],
     map_count: usize,
-    /// One row of splat bins, for the lateral maps.
-    row_scratch: Vec<[f32; 2]>,
+    /// Work memory of the lateral maps.
+    remap_scratch: RemapScratch,
     /// The smoke's fields at the frame's time, `None` when the studied
     /// vein holds none (closed, thrombosed, or smoke off).
     smoke_phase: Option<SmokePhase>,
@@ -428,7 +428,7 @@ impl Renderer {
             lumen_count: 0,
             lateral_maps: [LateralMap::default(); MAX_VESSELS],
             map_count: 0,
-            row_scratch: vec![[0.0; 2]; bins],
+            remap_scratch: RemapScratch::new(bins, cfg.rows),
             smoke_phase: None,
             stage_clock: wall_seconds,
             times: StageTimes::default(),
@@ -850,7 +850,7 @@ impl Renderer {
                 dz,
                 u_first,
                 dx,
-                &mut self.row_scratch,
+                &mut self.remap_scratch,
             );
         }
         self.times.prepare += prepared; // the specular interfaces' depths
