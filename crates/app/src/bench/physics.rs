@@ -132,14 +132,7 @@ pub fn run(args: Args) -> anyhow::Result<()> {
         "cases": cases,
         "window": window,
     });
-    let text = serde_json::to_string_pretty(&json)?;
-    if let Some(path) = &args.out {
-        std::fs::write(path, &text).with_context(|| format!("writing {}", path.display()))?;
-    }
-    if args.json {
-        println!("{text}");
-    }
-    Ok(())
+    emit(&args, &json)
 }
 
 /// The active window's A/B: the 10k press without and with the window,
@@ -240,14 +233,7 @@ fn run_compare(args: &Args) -> anyhow::Result<()> {
         "new": "edge_simd",
         "cases": cases,
     });
-    let text = serde_json::to_string_pretty(&json)?;
-    if let Some(path) = &args.out {
-        std::fs::write(path, &text).with_context(|| format!("writing {}", path.display()))?;
-    }
-    if args.json {
-        println!("{text}");
-    }
-    Ok(())
+    emit(args, &json)
 }
 
 fn run_direct(args: &Args) -> anyhow::Result<()> {
@@ -271,14 +257,7 @@ fn run_direct(args: &Args) -> anyhow::Result<()> {
         "threads": 1,
         "direct": r,
     });
-    let text = serde_json::to_string_pretty(&json)?;
-    if let Some(path) = &args.out {
-        std::fs::write(path, &text).with_context(|| format!("writing {}", path.display()))?;
-    }
-    if args.json {
-        println!("{text}");
-    }
-    Ok(())
+    emit(args, &json)
 }
 
 fn print_row(r: &CaseReport) {
@@ -304,4 +283,16 @@ fn print_named_row(name: &str, r: &CaseReport) {
         r.newton_iterations_mean,
         r.limited_total
     );
+}
+
+/// Writes the JSON report to `--out` and prints it with `--json`.
+fn emit(args: &Args, json: &serde_json::Value) -> anyhow::Result<()> {
+    let text = serde_json::to_string_pretty(json)?;
+    if let Some(path) = &args.out {
+        std::fs::write(path, &text).with_context(|| format!("writing {}", path.display()))?;
+    }
+    if args.json {
+        println!("{text}");
+    }
+    Ok(())
 }
