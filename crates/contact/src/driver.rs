@@ -259,7 +259,8 @@ impl ProbeContact {
         )
     }
 
-    /// The contact wrench on the probe at the model's current state, the
+    /// The contact wrench on the probe (N, N·m; the penalty contact of the
+    /// paper's Eq. 2) at the model's current state, the
     /// broad phase rebuilt on the current positions: the force and torque
     /// [`Self::sample`] reports, without its queries (the `direct`
     /// coupling's real-time tick renders only this). [`Self::advance`]'s
