@@ -121,7 +121,7 @@ pub struct Patient {
     /// the popliteal vein 310 mm below the groin), average female 35 (34.7 N,
     /// popliteal, 270 mm), obese 50 (49.5 N, popliteal, 310 mm) (derived:
     /// measured on the physical model by
-    /// `runtime/tests/coaptation_along_leg.rs`, which checks each preset's
+    /// `runtime/tests/suite/coaptation_along_leg.rs`, which checks each preset's
     /// value against its own presses). The force depends on the vessels'
     /// depth (the fat and muscle over them), not on the tissue's stiffness:
     /// the vein and the artery respond to the pressure a force puts at their

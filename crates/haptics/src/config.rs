@@ -205,7 +205,7 @@ pub struct RenderConfig {
     /// issue 20), so that no model change, friction slip or re-entry after a
     /// stall changes the force by more than that in one tick (2 N per tick
     /// was measured after a 0.35 s physics stall with 2000 N/s,
-    /// `crates/app/tests/stall.rs`).
+    /// `crates/app/tests/suite/stall.rs`).
     pub force_rate_limit: f64,
     /// Model age beyond which the loss is declared and the force is
     /// released to zero, s, in [0, 5]. Default 0.1.

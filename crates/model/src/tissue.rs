@@ -11,7 +11,7 @@
 //! instead turns with the node: compressed, its geometric stiffness
 //! `−|f|/l` pushes the node sideways, and under a concentrated load (20 N on
 //! three nodes of the cylinder) the node slid round the anchor and settled
-//! 26 mm *below* it (`tests/concentrated_load.rs`). The column has no
+//! 26 mm *below* it (`tests/suite/concentrated_load.rs`). The column has no
 //! geometric term; shear is the tangential tie's.
 //!
 //! Parameters are converted once from the resolution-independent

@@ -15,7 +15,7 @@
 //! the window ends, which decays fast away from the probe (issue 18: at
 //! the press peak on 10 112 nodes, everything above 1e-4 of the peak
 //! displacement lies within ~100 mm of the probe). The validation against
-//! the full model is `crates/contact/tests/window.rs`.
+//! the full model is `crates/contact/tests/suite/window.rs`.
 //!
 //! **Following the probe** ([`ActiveWindow::follow`], see [`shape`] for
 //! the membership rules): the window re-centres when the probe's nearest

@@ -1,6 +1,6 @@
 //! The versioned schema: migrations under `migrations/sqlite` and
 //! `migrations/postgres` (same version numbers, same tables and columns;
-//! `tests/schema_parity.rs`), applied on open, and the refusal of a
+//! `tests/suite/schema_parity.rs`), applied on open, and the refusal of a
 //! database migrated by a newer echothigh.
 
 use crate::{Backend, RecordsError};

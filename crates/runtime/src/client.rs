@@ -185,7 +185,7 @@ pub fn run_client<D: TickDevice + Send + 'static>(
             // Until the first physics sample the startup grace applies: the
             // handshake's Welcome marks the peer heard, but the server steps
             // only once this side's first pose has reached it, a round trip
-            // through both loops' start (seen in `app/tests/faults.rs` on two
+            // through both loops' start (seen in `app/tests/suite/faults.rs` on two
             // busy cores: 0.25 s passed with no sample and the client quit).
             let silent = link.peer_closed()
                 || match link.last_heard() {

@@ -65,7 +65,7 @@ pub struct PressConfig {
     /// the force at which the artery is clearly oval at the leg's hardest
     /// level and the device's renderable limit (issue 12), so that an
     /// adequate press can close a healthy vein at every level of every
-    /// preset (the obese leg's need 12–22 N, `tests/coaptation_along_leg.rs`;
+    /// preset (the obese leg's need 12–22 N, `tests/suite/coaptation_along_leg.rs`;
     /// the former fixed 20 N stopped short there).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub max_force: Option<f64>,

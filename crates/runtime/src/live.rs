@@ -35,7 +35,7 @@ pub struct LiveMesh {
 /// A vein's lumen below this fraction of its rest area counts as coapted,
 /// its walls met: issue 13's criterion ("a healthy segment coapts: lumen <
 /// 10 % of rest"), which the image's segmentation also reaches (a healthy
-/// vein's dark-pixel ratio 0.03 at 10 N, `tests/case_compression.rs`).
+/// vein's dark-pixel ratio 0.03 at 10 N, `tests/suite/case_compression.rs`).
 pub const COAPTED_RATIO: f64 = 0.10;
 
 /// What scheduling the haptic thread got.

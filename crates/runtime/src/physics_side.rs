@@ -110,7 +110,7 @@ impl PhysicsSide {
     /// The sample kept for [`Self::last_sample`] has that force and torque;
     /// its `D` is +∞ and its `k` 0 (not computed), and so are the record's.
     /// The force is [`Self::step`]'s to the bit (the queries only read the
-    /// model; `tests/direct_force_only.rs`).
+    /// model; `tests/suite/direct_force_only.rs`).
     /// Returns the force on the probe (N) and the step's record.
     /// Allocation-free.
     pub fn step_force(

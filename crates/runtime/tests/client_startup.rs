@@ -6,7 +6,7 @@
 //! message at t = 0 (heard, not a sample, as the Welcome), then its samples
 //! from 0.6 s on: past the 0.25 s peer timeout, inside the 2 s grace. Before
 //! the fix the client declared the physics lost at 0.25 s with no sample
-//! (seen in `app/tests/faults.rs` on two busy cores).
+//! (seen in `app/tests/suite/faults.rs` on two busy cores).
 
 use echothigh_runtime::client::{run_client, ClientConfig, ClientEnd, LoopParts};
 use echothigh_runtime::deploy::scripted_device;

@@ -11,6 +11,8 @@
 //! pulling in a profiler (dhat, stats_alloc's global statistics count every
 //! thread); it is written here once instead of once per crate.
 
+pub mod suite;
+
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 

@@ -259,7 +259,7 @@ mod tests {
 
     /// The trainee page shows the per-site counts, sensitivity and
     /// specificity, the Doppler accuracy and the missed segments it is
-    /// given (the numbers of `crates/records/tests/breakdown.rs`: cfv 1 of
+    /// given (the numbers of `crates/records/tests/suite/breakdown.rs`: cfv 1 of
     /// 3 Doppler calls right = 33 %, popliteal 2 of 3 = 67 %; per-site
     /// TP 1 FN 1 TN 0 FP 1 → sensitivity 50 %, specificity 0 %).
     #[test]

@@ -140,16 +140,27 @@ pub fn finish_run(
 
 fn report(dir: &Path, s: &Summary) {
     println!("run written to {}", dir.display());
+    // Direct coupling steps the physics inside every tick: there is no
+    // physics loop whose steps to count (the count read "0 physics steps").
+    let physics = if s.mode == "direct" {
+        format!(
+            "the physics stepped in every tick ({:.1} Hz)",
+            s.physics_rate
+        )
+    } else {
+        format!(
+            "{} physics steps at {:.1} Hz",
+            s.physics_steps, s.physics_rate
+        )
+    };
     println!(
-        "mode {} ({}): {} ticks at {:.0} Hz, {} missed deadlines; {} physics steps at {:.1} Hz; \
+        "mode {} ({}): {} ticks at {:.0} Hz, {} missed deadlines; {physics}; \
          peak force {:.2} N (device {:.2} N)",
         s.mode,
         s.deployment,
         s.ticks,
         s.haptic_rate,
         s.missed_deadlines,
-        s.physics_steps,
-        s.physics_rate,
         s.peak_force,
         s.peak_device_force
     );

@@ -15,7 +15,7 @@ use serde::{Deserialize, Serialize};
 pub struct WindowParams {
     /// Integrate only the window (true) or the whole mesh (false, the
     /// default: the full model is the reference the window is checked
-    /// against, `crates/contact/tests/window.rs`).
+    /// against, `crates/contact/tests/suite/window.rs`).
     pub enabled: bool,
     /// Radius `r` (m): every node within `r` of the probe's nearest node
     /// (along and around, on the rest surface) is always integrated. In
@@ -24,7 +24,7 @@ pub struct WindowParams {
     /// 1 m it holds any mesh this model builds. Default 0.05: validated
     /// against the full model on the 10 112-node leg (force within 0.05 %,
     /// displacement within 0.06 % of its peak over a Fig. 4 exam and a
-    /// 100 mm slide, `crates/contact/tests/window.rs`).
+    /// 100 mm slide, `crates/contact/tests/suite/window.rs`).
     pub radius: f64,
     /// Hysteresis `m` (m): the window re-centres on the probe only when the
     /// probe's nearest node is more than `m` from the window's centre, so a

@@ -6,7 +6,7 @@
 //! Per tick, besides the tick itself: a device that senses no orientation
 //! gets the probe normal to the skin under it ([`SkinNormal`]); the device's
 //! clutch, force and health go to the page through a lock-free single-slot
-//! handoff. Nothing here allocates, locks or waits (`tests/live_device.rs`
+//! handoff. Nothing here allocates, locks or waits (`tests/suite/live_device.rs`
 //! counts the allocations of [`DeviceLoop::step`]). A device that stops
 //! answering ([`HapticDevice::lost`]) ends the loop: the force is released,
 //! the page told, the session's threads stop.

@@ -2,7 +2,7 @@
 //! against the runtime's test double: the page's probe commands are refused
 //! like an observer tab's, and the state carries the device's status. (The
 //! live system's own refusal, with the emulated Touch, is tested in
-//! `echothigh-runtime`'s `tests/live_device.rs`.)
+//! `echothigh-runtime`'s `tests/suite/live_device.rs`.)
 
 use super::super::fake::FakeLive;
 use super::server::{connect, next_error, next_state, send, start};

@@ -1,0 +1,274 @@
+//! The shapes the vessels take under the probe (issue 21, "vessels that
+//! deform as they do"): an oval vein at rest that flattens about its own
+//! axis into a lens and then a bright line of coapted walls, and an artery
+//! that stays round until its pressure cue.
+//!
+//! Shapes are measured on the rendered pixels (the extent of the dark
+//! region around the vessel) and on the lumen geometry the renderer
+//! reports ([`Renderer::lumens`]).
+//!
+//! The shapes on the pixels are measured with plain muscle speckle around
+//! the vessels ([`plain_muscle`]): the dark region is thresholded against
+//! muscle's mean, and the starry sky (`texture.muscle_fascicles`, a
+//! background 1.5 dB darker carrying sparse +15 dB dots) moves that
+//! threshold's meaning from region to region. With it on, the artery's
+//! measured aspect at 10 N read 1.12 of rest against the 1.10 bound
+//! (2026-11-27), with its lumen geometry exactly round: the measurement,
+//! not the vessel, changed. The lumen geometry tests do not depend on it.
+
+use crate::common;
+use common::*;
+use echothigh_imaging::*;
+
+/// The default configuration without the starry sky (see the module's comment).
+fn plain_muscle() -> ImagingConfig {
+    let mut cfg = ImagingConfig::default();
+    cfg.texture.muscle_fascicles = false;
+    cfg
+}
+
+/// Extent `(width, height)` (m) of the dark region connected to the
+/// lumen's reported centre: the frame's intensity averaged over 5 × 5
+/// pixels, thresholded 10 dB below the muscle beside the vessels at the
+/// same depth (the threshold of `lumen.rs`), flood-filled inside a box of
+/// the vessel's rest half-width + 2 mm. `None` if the centre is not dark.
+fn dark_extent(cfg: &ImagingConfig, frame: &[u8], l: &Lumen, rest_half: f64) -> Option<(f64, f64)> {
+    let (w, h) = (cfg.columns, cfg.rows);
+    let muscle = mean_db(cfg, frame, (12e-3, 19e-3), (l.depth - 3e-3, l.depth + 3e-3));
+    let limit = 10f64.powf((muscle - 10.0) / 10.0);
+    let smooth = |j: usize, i: usize| {
+        let mut s = 0.0;
+        let mut n = 0.0;
+        for ii in i.saturating_sub(2)..(i + 3).min(h) {
+            for jj in j.saturating_sub(2)..(j + 3).min(w) {
+                s += intensity(frame[ii * w + jj], cfg.dynamic_range);
+                n += 1.0;
+            }
+        }
+        s / n
+    };
+    let span = rest_half + 2e-3;
+    let (cols, rows) = region(
+        cfg,
+        (l.lateral - span, l.lateral + span),
+        (l.depth - span, l.depth + span),
+    );
+    let seed = (
+        ((l.lateral + 0.5 * cfg.width) / cfg.pixel_width()) as usize,
+        (l.depth / cfg.pixel_depth()) as usize,
+    );
+    let mut seen = vec![false; w * h];
+    let mut stack = vec![seed];
+    let (mut j0, mut j1, mut i0, mut i1) = (usize::MAX, 0, usize::MAX, 0);
+    while let Some((j, i)) = stack.pop() {
+        if !cols.contains(&j) || !rows.contains(&i) || seen[i * w + j] {
+            continue;
+        }
+        seen[i * w + j] = true;
+        if smooth(j, i) >= limit {
+            continue;
+        }
+        (j0, j1, i0, i1) = (j0.min(j), j1.max(j), i0.min(i), i1.max(i));
+        stack.extend([
+            (j + 1, i),
+            (j.wrapping_sub(1), i),
+            (j, i + 1),
+            (j, i.wrapping_sub(1)),
+        ]);
+    }
+    (j0 != usize::MAX).then(|| {
+        (
+            (j1 - j0 + 1) as f64 * cfg.pixel_width(),
+            (i1 - i0 + 1) as f64 * cfg.pixel_depth(),
+        )
+    })
+}
+
+/// Forces (N) of a slow press, 0 to 20 N.
+fn forces() -> impl Iterator<Item = f64> {
+    (0..=40).map(|k| 0.5 * k as f64)
+}
+
+/// Width over height of a reported lumen (∞ when flat).
+fn aspect(l: &Lumen) -> f64 {
+    l.half_width / l.half_height
+}
+
+#[test]
+fn vein_is_oval_at_rest_and_artery_round() {
+    let cfg = plain_muscle();
+    let mut r = Renderer::new(&cfg, VeinState::Healthy).unwrap();
+    let (frame, l) = render_force(&mut r, 0.0, 0.0);
+    // The geometry: the documented estimate for a patent vein, 1.2–1.5
+    // (`VEIN_REST_ASPECT`), and a round artery.
+    let v = aspect(&l.vein);
+    assert!((1.2..=1.5).contains(&v), "rest vein aspect {v}");
+    assert!((aspect(&l.artery) - 1.0).abs() < 1e-9);
+    // On the pixels: the dark region's extent. Its width and height are
+    // each off by the blur at the threshold, under 1 mm (the lateral PSF
+    // at 30 mm is ≈ 0.5 mm wide, the 5-pixel smoothing 0.4 mm); on a
+    // ~10 mm lumen that moves the aspect by < 0.2, so a rest vein measured
+    // ≥ 1.15 is oval and an artery within 0.85–1.15 is round.
+    let a = r.anatomy().unwrap();
+    let (vw, vh) = dark_extent(&cfg, &frame, &l.vein, a.vein().half_width()).unwrap();
+    let (aw, ah) = dark_extent(&cfg, &frame, &l.artery, a.artery().half_width()).unwrap();
+    assert!(vw / vh >= 1.15, "rest vein on the image {vw} × {vh} m");
+    assert!(
+        (aw / ah - 1.0).abs() < 0.15,
+        "rest artery on the image {aw} × {ah} m"
+    );
+}
+
+#[test]
+fn compressed_vein_flattens_about_its_axis_and_keeps_its_width() {
+    let cfg = plain_muscle();
+    let mut r = Renderer::new(&cfg, VeinState::Healthy).unwrap();
+    let rest_half = r.anatomy().unwrap().vein().half_width();
+    let (rest_frame, l0) = render_force(&mut r, 0.0, 0.0);
+    let (w0, h0) = dark_extent(&cfg, &rest_frame, &l0.vein, rest_half).unwrap();
+    let mut last = 0.0;
+    let mut last_pixels = 0.0;
+    let mut measured = 0;
+    for f in forces() {
+        let (frame, l) = render_force(&mut r, f, 0.0);
+        let c = l.vein.area / l.vein.rest_area;
+        if c <= 0.0 {
+            break;
+        }
+        // The reported lumen: the aspect rises with every step of force (to
+        // rounding, 1e-9)
+        // (its height scales by c, its width stays), and the centre stays
+        // where the column puts the vessel's axis: it does not sink onto
+        // the lower wall. At rest the centre is at the axis; the column
+        // map `y = d + s (1 − d/B)` moves it to `d + s (1 − d/B)`.
+        let a = aspect(&l.vein);
+        assert!(a >= last - 1e-9, "aspect falls at {f} N: {a} < {last}");
+        last = a;
+        let s = indentation(f);
+        let bone = r.anatomy().unwrap().femur_top();
+        let v = r.anatomy().unwrap().vein();
+        let axis = v.depth + s * (1.0 - v.depth / bone) - s;
+        assert!(
+            (l.vein.depth - axis).abs() < 1e-9,
+            "centre off the axis at {f} N"
+        );
+        // On the pixels, while the lumen is taller than the blur (c ≥ 0.3:
+        // 2.6 mm of a 8.8 mm rest height): the width stays ≥ 80 % of
+        // rest and the aspect rises, up to one pixel of quantisation on
+        // the height (0.078 mm of ≥ 2.6 mm, 3 %) plus the speckle at the
+        // threshold's edge (a 5 × 5 mean of ~3 speckle cells: ±1 pixel on
+        // each of width and height), so within 8 % of the previous force's.
+        if c >= 0.3 {
+            let (w, h) = dark_extent(&cfg, &frame, &l.vein, rest_half).unwrap();
+            assert!(w >= 0.8 * w0, "width {w} m at {f} N, rest {w0} m");
+            let ap = w / h;
+            assert!(
+                ap >= 0.92 * last_pixels,
+                "image aspect falls at {f} N: {ap}"
+            );
+            last_pixels = ap;
+            measured += 1;
+            if c <= 0.5 {
+                assert!(ap > 1.5 * w0 / h0, "not a lens at {f} N: {w} × {h} m");
+            }
+        }
+    }
+    assert!(measured >= 4, "too few open frames measured: {measured}");
+    assert!(last > 2.0 * aspect(&l0.vein), "the vein never flattened");
+}
+
+#[test]
+fn coapted_walls_leave_a_bright_line() {
+    let cfg = ImagingConfig::default();
+    let mut r = Renderer::new(&cfg, VeinState::Healthy).unwrap();
+    let (frame, l) = render_force(&mut r, EXAM_FORCE, 0.0);
+    assert_eq!(l.vein.area, 0.0, "closed at the exam force");
+    // The line: the two walls (0.5 mm each, +4 dB over muscle) meet on the
+    // axis, 1 mm thick, blurred by the axial PSF (≈ 0.3 mm); averaged over
+    // ±0.4 mm in depth and the middle 60 % of the vein's width it is ~+3
+    // dB, over ~20 speckle cells (a mean's spread ≈ 5.6/√20 ≈ 1.3 dB). The
+    // muscle beside is averaged over a 7 × 6 mm box (spread < 0.5 dB). The
+    // line must stand ≥ 1 dB above it: an image where the walls vanish
+    // (anechoic blood or muscle at the axis) fails.
+    let half = 0.6 * l.vein.half_width;
+    let line = mean_db(
+        &cfg,
+        &frame,
+        (l.vein.lateral - half, l.vein.lateral + half),
+        (l.vein.depth - 0.4e-3, l.vein.depth + 0.4e-3),
+    );
+    let muscle = mean_db(
+        &cfg,
+        &frame,
+        (12e-3, 19e-3),
+        (l.vein.depth - 3e-3, l.vein.depth + 3e-3),
+    );
+    println!("coapted line {:.1} dB over muscle", line - muscle);
+    assert!(line > muscle + 1.0, "line {line} dB, muscle {muscle} dB");
+}
+
+#[test]
+fn artery_stays_round_below_its_cue_then_ovalises() {
+    let cfg = plain_muscle();
+    let mut r = Renderer::new(&cfg, VeinState::Healthy).unwrap();
+    let onset = r.anatomy().unwrap().config().artery_collapse_onset;
+    let rest_half = r.anatomy().unwrap().artery().half_width();
+    let (rest_frame, l0) = render_force(&mut r, 0.0, 0.0);
+    let (w0, h0) = dark_extent(&cfg, &rest_frame, &l0.artery, rest_half).unwrap();
+    let mut ovalised = false;
+    for f in forces() {
+        let (frame, l) = render_force(&mut r, f, 0.0);
+        let a = aspect(&l.artery);
+        if l.artery.tissue_pressure < onset {
+            // Below the cue the reported lumen is round (within rounding).
+            assert!((a - 1.0).abs() < 1e-6, "artery aspect {a} at {f} N");
+            // On the image: within 10 % of its rest aspect (the bound of
+            // the issue; the same blur at the same threshold applies to
+            // both frames, and ±1 pixel of 7 mm on each side is ±2 %).
+            if f.rem_euclid(5.0) == 0.0 {
+                let (w, h) = dark_extent(&cfg, &frame, &l.artery, rest_half).unwrap();
+                let rel = (w / h) / (w0 / h0);
+                assert!(
+                    (rel - 1.0).abs() < 0.1,
+                    "artery on the image at {f} N: {rel}"
+                );
+            }
+        } else if a > 1.1 {
+            ovalised = true;
+        }
+    }
+    assert!(ovalised, "the artery never ovalised within 20 N");
+}
+
+/// Prints the shapes (reported and on the image) at 0, 2, 5, 10 N:
+/// `cargo test -p echothigh-imaging --test suite vessel_shape:: -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn print_shapes() {
+    let cfg = ImagingConfig::default();
+    let mut r = Renderer::new(&cfg, VeinState::Healthy).unwrap();
+    let (vh, ah) = {
+        let a = r.anatomy().unwrap();
+        (a.vein().half_width(), a.artery().half_width())
+    };
+    for f in [0.0, 2.0, 5.0, 10.0, 15.0, 20.0] {
+        let (frame, l) = render_force(&mut r, f, 0.0);
+        if let Ok(dir) = std::env::var("SHAPES_DIR") {
+            let path = std::path::Path::new(&dir).join(format!("healthy_{f:.0}N.png"));
+            write_gray_png(&path, cfg.columns, cfg.rows, &frame).unwrap();
+        }
+        let px = |x: Option<(f64, f64)>| match x {
+            Some((w, h)) => format!("{:.1} x {:.1} mm ({:.2})", w * 1e3, h * 1e3, w / h),
+            None => "closed".to_string(),
+        };
+        println!(
+            "{f:>4} N vein c={:.2} model {:.2} image {} | artery p={:.0} mmHg model {:.2} image {}",
+            l.vein.area / l.vein.rest_area,
+            aspect(&l.vein),
+            px(dark_extent(&cfg, &frame, &l.vein, vh)),
+            l.artery.tissue_pressure / 133.322,
+            aspect(&l.artery),
+            px(dark_extent(&cfg, &frame, &l.artery, ah)),
+        );
+    }
+}
