@@ -10,13 +10,14 @@
 //! 4. per-column attenuation/TGC and log compression, then the transpose
 //!    into the row-major output (row = depth).
 
-use crate::anatomy::{Anatomy, Vessel};
+use crate::anatomy::Anatomy;
 use crate::anatomy_config::VeinState;
 use crate::config::ImagingConfig;
 use crate::deformation::{column_depth, SectionDeformation};
 use crate::edge_shadow::EdgeShadows;
 use crate::enhancement::LossBlur;
 use crate::error::ImagingError;
+use crate::lateral_map::{LateralMap, RemapScratch};
 use crate::material::MaterialWindow;
 use crate::pressure::stress_under_rectangle;
 use crate::psf::PsfTables;
@@ -30,6 +31,7 @@ use crate::stages::{
     FrameGeometry, LogCompression,
 };
 use crate::warp::{compensated_ratio, VesselWarp, WarpSet, MAX_VESSELS};
+use crate::widen::{blood_fraction, decay_lengths, lumen_shape, side_caps, LumenShape};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -170,6 +172,12 @@ pub struct Renderer {
     /// The vessels' lumens of the current frame (the first `lumen_count`).
     lumens: [VesselLumen; MAX_VESSELS],
     lumen_count: usize,
+    /// The lateral maps of the current frame's widening lumens
+    /// ([`crate::lateral_map`]; the first `map_count`).
+    lateral_maps: [LateralMap; MAX_VESSELS],
+    map_count: usize,
+    /// Work memory of the lateral maps.
+    remap_scratch: RemapScratch,
     /// The smoke's fields at the frame's time, `None` when the studied
     /// vein holds none (closed, thrombosed, or smoke off).
     smoke_phase: Option<SmokePhase>,
@@ -418,6 +426,9 @@ impl Renderer {
             muscle_amp,
             lumens: [VesselLumen::default(); MAX_VESSELS],
             lumen_count: 0,
+            lateral_maps: [LateralMap::default(); MAX_VESSELS],
+            map_count: 0,
+            remap_scratch: RemapScratch::new(bins, cfg.rows),
             smoke_phase: None,
             stage_clock: wall_seconds,
             times: StageTimes::default(),
@@ -488,13 +499,20 @@ impl Renderer {
         (self.field.pan as isize + p) as usize
     }
 
-    fn lumen_of(
+    /// The lumen of vessel `i` of the anatomy in the frame `input` (probe
+    /// face at `face`, m) and how it is drawn: its area by its law
+    /// ([`Anatomy::lumen_ratio`]) at the tissue pressure at its centre
+    /// ([`crate::pressure`]), its height ratio and edge shifts by the
+    /// wall-length law ([`crate::widen`]). The reported half-width and
+    /// centre are the widened lumen's.
+    fn shape_of(
         &self,
-        v: &Vessel,
+        a: &Anatomy,
+        i: usize,
         input: &FrameInput,
         face: f64,
-        ratio_of: impl Fn(f64) -> f64,
-    ) -> Lumen {
+    ) -> (Lumen, LumenShape) {
+        let v = &a.vessels()[i].vessel;
         let def = input.deformation;
         // The vessel in the image's frame.
         let lateral = v.lateral - self.pan(input.lateral_offset).0;
@@ -508,20 +526,23 @@ impl Renderer {
             0.0,
             centre.max(0.0),
         );
-        let ratio = ratio_of(p);
-        let warp = VesselWarp::new(v, v.lateral, compensated_ratio(ratio, s, def.bone_depth));
-        let (c, h) = v.chord(v.lateral, 0.0);
-        let top = column_depth(s, def.bone_depth, warp.apply(c - h)) - face;
-        let bottom = column_depth(s, def.bone_depth, warp.apply(c + h)) - face;
-        Lumen {
+        let ratio = a.lumen_ratio(i, p, input.time) * self.distension_of(i);
+        let shape = lumen_shape(v, ratio, blood_fraction(a, i), side_caps(a, i));
+        let c = shape.height_ratio;
+        let warp = VesselWarp::new(v, v.lateral, compensated_ratio(c, s, def.bone_depth));
+        let (mid, h) = v.chord(v.lateral, 0.0);
+        let top = column_depth(s, def.bone_depth, warp.apply(mid - h)) - face;
+        let bottom = column_depth(s, def.bone_depth, warp.apply(mid + h)) - face;
+        let lumen = Lumen {
             area: ratio * v.rest_area(),
             rest_area: v.rest_area(),
             tissue_pressure: p,
-            lateral,
+            lateral: lateral + shape.centre_offset(),
             depth: 0.5 * (top + bottom),
             half_height: 0.5 * (bottom - top),
-            half_width: v.half_width(),
-        }
+            half_width: shape.half_width(v.half_width()),
+        };
+        (lumen, shape)
     }
 
     /// Sets the studied vein's (vessel 0's) distension: its lumen's height
@@ -557,12 +578,8 @@ impl Renderer {
         };
         let face = input.deformation.face_depth(0.5 * self.cfg.width);
         Ok(Some(LumenReport {
-            vein: self.lumen_of(a.vein(), input, face, |p| {
-                a.vein_lumen_ratio(p) * self.vein_distension
-            }),
-            artery: self.lumen_of(a.artery(), input, face, |p| {
-                a.artery_lumen_ratio(p, input.time)
-            }),
+            vein: self.shape_of(a, 0, input, face).0,
+            artery: self.shape_of(a, 1, input, face).0,
         }))
     }
 
@@ -578,13 +595,11 @@ impl Renderer {
         let Some(a) = &self.anatomy else {
             return Ok(None);
         };
-        let Some(sv) = a.vessels().get(i) else {
+        if i >= a.vessels().len() {
             return Ok(None);
-        };
+        }
         let face = input.deformation.face_depth(0.5 * self.cfg.width);
-        Ok(Some(self.lumen_of(&sv.vessel, input, face, |p| {
-            a.lumen_ratio(i, p, input.time) * self.distension_of(i)
-        })))
+        Ok(Some(self.shape_of(a, i, input, face).0))
     }
 
     /// Stage 1: frame geometry, per-column skin displacement and warps.
@@ -600,15 +615,21 @@ impl Renderer {
         self.noise_roll = tick.wrapping_mul(2_654_435_761) % NOISE_ROLL;
         check_input(input)?;
         let mut ratios = [1.0f64; MAX_VESSELS];
+        let mut heights = [1.0f64; MAX_VESSELS];
+        let mut shapes = [LumenShape::default(); MAX_VESSELS];
         let mut lumens = [VesselLumen::default(); MAX_VESSELS];
         let n = match &self.anatomy {
             Some(a) => {
                 let vs = a.vessels();
-                for (i, r) in ratios.iter_mut().enumerate().take(vs.len()) {
-                    let l = self.lumen_of(&vs[i].vessel, input, face, |p| {
-                        a.lumen_ratio(i, p, input.time) * self.distension_of(i)
-                    });
+                for (i, r) in ratios
+                    .iter_mut()
+                    .enumerate()
+                    .take(vs.len().min(MAX_VESSELS))
+                {
+                    let (l, shape) = self.shape_of(a, i, input, face);
                     *r = l.area / vs[i].vessel.rest_area();
+                    heights[i] = shape.height_ratio;
+                    shapes[i] = shape;
                     lumens[i] = VesselLumen {
                         lateral: l.lateral,
                         depth: l.depth,
@@ -639,7 +660,7 @@ impl Renderer {
             let set = &mut self.warps[b];
             set.clear();
             if let Some(a) = &self.anatomy {
-                for (sv, &r) in a.vessels().iter().zip(&ratios[..n]) {
+                for (sv, &r) in a.vessels().iter().zip(&heights[..n]) {
                     let mut w =
                         VesselWarp::new(&sv.vessel, u, compensated_ratio(r, s, def.bone_depth))
                             .with_floor(a.femur_top());
@@ -651,22 +672,76 @@ impl Renderer {
                 }
             }
         }
-        self.edge_shadows(&ratios[..n], pan_m);
+        self.lateral_maps(&shapes[..n], pan_m);
+        self.edge_shadows(&ratios[..n], &shapes[..n], pan_m);
         Ok(())
+    }
+
+    /// The lateral maps ([`crate::lateral_map`]) of the widening lumens of
+    /// `shapes` (one per vessel): each vessel's band is its walls' depth
+    /// span in the frame (through the columns it crosses, after the
+    /// warps); the shift fades over the vessel's rest half-height above it
+    /// and the same below, ending at the femur's top.
+    fn lateral_maps(&mut self, shapes: &[LumenShape], pan_m: f64) {
+        self.map_count = 0;
+        let Some(a) = &self.anatomy else {
+            return;
+        };
+        let g = &self.geometry;
+        let floor = a.femur_top();
+        for (i, (sv, shape)) in a.vessels().iter().zip(shapes).enumerate() {
+            if !shape.is_widened() {
+                continue;
+            }
+            let v = &sv.vessel;
+            let outer = v.chord_half_width(v.wall);
+            let (mut top, mut bottom) = (f64::INFINITY, f64::NEG_INFINITY);
+            for (b, &u_image) in self.bin_u.iter().enumerate() {
+                let u = u_image + pan_m;
+                let (c, h) = v.chord(u, v.wall);
+                if h <= 0.0 {
+                    continue;
+                }
+                let (s, w) = (self.surface[b], &self.warps[b]);
+                top = top.min(image_depth(g, s, w, c - h));
+                bottom = bottom.max(image_depth(g, s, w, c + h));
+            }
+            if !top.is_finite() || top > bottom {
+                continue; // the vessel is outside the window
+            }
+            let x0 = v.lateral - pan_m;
+            let s = self.surface[((x0 - self.bin_u[0]) / self.cfg.pixel_width())
+                .round()
+                .clamp(0.0, (self.bin_u.len() - 1) as f64)
+                as usize];
+            let bone = column_depth(s, g.bone, floor) - g.face;
+            let fade = v.half_height();
+            self.lateral_maps[self.map_count] = LateralMap::new(
+                x0,
+                v.half_width(),
+                outer,
+                shape.shift,
+                decay_lengths(a, i),
+                (top, bottom),
+                fade,
+                fade.min(bone - bottom),
+            );
+            self.map_count += 1;
+        }
     }
 
     /// The refraction edge shadows of the frame ([`crate::edge_shadow`]):
     /// the two lateral margins of each vessel (its wall's lateral extremes;
     /// lumen area `ratios[i]` of rest), in the image through the column of
-    /// each margin.
-    fn edge_shadows(&mut self, ratios: &[f64], pan_m: f64) {
+    /// each margin, moved outwards with the lumen's widening (`shapes`).
+    fn edge_shadows(&mut self, ratios: &[f64], shapes: &[LumenShape], pan_m: f64) {
         self.shadows.clear();
         let Some(a) = &self.anatomy else {
             return;
         };
         let dx = self.cfg.pixel_width();
         let (u0, last) = (self.bin_u[0], self.bin_u.len() - 1);
-        for (sv, &r) in a.vessels().iter().zip(ratios) {
+        for ((sv, &r), shape) in a.vessels().iter().zip(ratios).zip(shapes) {
             let v = &sv.vessel;
             let hw = v.half_width();
             // The vessel's top in the image, through the column at its
@@ -675,11 +750,12 @@ impl Renderer {
             let (c, h) = v.chord(v.lateral, v.wall);
             let bc = (((v.lateral - pan_m - u0) / dx).round().max(0.0) as usize).min(last);
             let top = image_depth(&self.geometry, self.surface[bc], &self.warps[bc], c - h) - 1e-3;
-            for s in [-1.0, 1.0] {
+            for (s, widen) in [(-1.0, shape.shift[0]), (1.0, shape.shift[1])] {
                 // 10 µm inside the margin, where the chord exists.
                 let ua = v.lateral + s * (hw - 1e-5);
-                let ui = v.lateral + s * v.chord_half_width(v.wall) - pan_m;
-                let b = (((ui - u0) / dx).round().max(0.0) as usize).min(last);
+                let ui = v.lateral + s * (v.chord_half_width(v.wall) + widen) - pan_m;
+                let rest = ui - s * widen;
+                let b = (((rest - u0) / dx).round().max(0.0) as usize).min(last);
                 let d = v.chord(ua, 0.0).0;
                 let z = image_depth(&self.geometry, self.surface[b], &self.warps[b], d);
                 self.shadows.push(ui, z, top, r);
@@ -762,6 +838,21 @@ impl Renderer {
                 col,
             );
         }
+        // The widening lumens move the splatted echo across columns.
+        let (dz, dx, u_first) = (g.dz, self.cfg.pixel_width(), self.bin_u[0]);
+        for m in &self.lateral_maps[..self.map_count] {
+            let rows = self.cfg.rows;
+            m.remap(
+                &mut self.rf,
+                pr,
+                self.pad,
+                rows,
+                dz,
+                u_first,
+                dx,
+                &mut self.remap_scratch,
+            );
+        }
         self.times.prepare += prepared; // the specular interfaces' depths
         self.times.splat = lap.lap();
         let rows = self.cfg.rows;
@@ -791,8 +882,16 @@ impl Renderer {
         // Loss exponents of every column, then each column's as the beam
         // sees it near the vessels' margins (`crate::enhancement`), with
         // the edge shadows, and the compression.
+        // A column crossing a widened lumen takes the loss of its source
+        // column through the lumen's band (the map at full weight): the
+        // enhancement below the lumen widens with it.
+        let last = self.bin_u.len() - 1;
         for (j, x) in self.loss.chunks_mut(rows).enumerate() {
-            let b = j + h;
+            let mut u = self.bin_u[j + h];
+            for m in self.lateral_maps[..self.map_count].iter().rev() {
+                u = m.source(u, 1.0);
+            }
+            let b = (((u - self.bin_u[0]) / dx).round().max(0.0) as usize).min(last);
             column_loss(
                 &self.lc,
                 g,

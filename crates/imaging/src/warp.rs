@@ -27,12 +27,11 @@
 //! moved the upper wall by `2k` over `1.5 b`, stretched by up to 2.3, 3.7
 //! dB, and the upper wall with it).
 //!
-//! The warp is vertical only (the scatterers are binned by column), so the
-//! lumen keeps its rest width in the image until the walls meet. A tube
-//! whose wall keeps its length (perimeter `P = 2π r` for a circle of radius
-//! `r`) would widen as it flattens: a line of half-width `a` has perimeter
-//! `4a`, so `a → π r / 2 ≈ 1.57 r`. Drawing that needs lateral motion of
-//! the scatterers across columns and is left out.
+//! The warp is vertical only (the scatterers are binned by column). The
+//! lumen's widening as it flattens (a wall that keeps its length,
+//! [`crate::widen`]) is drawn after the splat by a lateral map of the
+//! echo across columns ([`crate::lateral_map`]); the ratio given here is
+//! then the lumen's height ratio, not its area ratio.
 
 use crate::anatomy::Vessel;
 
