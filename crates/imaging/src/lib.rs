@@ -42,6 +42,7 @@ mod anatomy;
 mod anatomy_config;
 mod beam;
 mod beam_config;
+mod carry;
 #[cfg(target_arch = "x86_64")]
 mod compress_avx2;
 mod config;

@@ -4,11 +4,13 @@
 
 use super::{check_input, FrameInput, Renderer};
 use crate::anatomy::Anatomy;
+use crate::carry::stacked;
 use crate::deformation::column_depth;
+use crate::deformation::SectionDeformation;
 use crate::error::ImagingError;
 use crate::pressure::stress_under_rectangle;
 use crate::reverberation::LumenSpan;
-use crate::warp::{compensated_ratio, VesselWarp};
+use crate::warp::{compensated_ratio, VesselWarp, MAX_VESSELS};
 use crate::widen::{blood_fraction, lumen_shape, side_caps, LumenShape};
 
 /// The state of one vessel's lumen in a frame.
@@ -71,13 +73,16 @@ impl Renderer {
     /// ([`Anatomy::lumen_ratio`]) at the tissue pressure at its centre
     /// ([`crate::pressure`]), its height ratio and edge shifts by the
     /// wall-length law ([`crate::widen`]). The reported half-width and
-    /// centre are the widened lumen's.
+    /// centre are the widened lumen's, its depth moved by `by` (m, in
+    /// tissue depth: what its collapsing neighbours carry it by,
+    /// [`carried`]).
     pub(super) fn shape_of(
         &self,
         a: &Anatomy,
         i: usize,
         input: &FrameInput,
         face: f64,
+        by: f64,
     ) -> (Lumen, LumenShape) {
         let v = &a.vessels()[i].vessel;
         let def = input.deformation;
@@ -98,8 +103,8 @@ impl Renderer {
         let c = shape.height_ratio;
         let warp = VesselWarp::new(v, v.lateral, compensated_ratio(c, s, def.bone_depth));
         let (mid, h) = v.chord(v.lateral, 0.0);
-        let top = column_depth(s, def.bone_depth, warp.apply(mid - h)) - face;
-        let bottom = column_depth(s, def.bone_depth, warp.apply(mid + h)) - face;
+        let top = column_depth(s, def.bone_depth, warp.apply(mid - h) + by) - face;
+        let bottom = column_depth(s, def.bone_depth, warp.apply(mid + h) + by) - face;
         let lumen = Lumen {
             area: ratio * v.rest_area(),
             rest_area: v.rest_area(),
@@ -145,8 +150,8 @@ impl Renderer {
         };
         let face = input.deformation.face_depth(0.5 * self.cfg.width);
         Ok(Some(LumenReport {
-            vein: self.shape_of(a, 0, input, face).0,
-            artery: self.shape_of(a, 1, input, face).0,
+            vein: self.carried_lumen(a, 0, input, face),
+            artery: self.carried_lumen(a, 1, input, face),
         }))
     }
 
@@ -166,6 +171,66 @@ impl Renderer {
             return Ok(None);
         }
         let face = input.deformation.face_depth(0.5 * self.cfg.width);
-        Ok(Some(self.shape_of(a, i, input, face).0))
+        Ok(Some(self.carried_lumen(a, i, input, face)))
     }
+
+    /// The height ratios `c` of the first `n` vessels' drawn lumens.
+    pub(super) fn height_ratios(
+        &self,
+        a: &Anatomy,
+        input: &FrameInput,
+        face: f64,
+    ) -> ([f64; MAX_VESSELS], usize) {
+        let n = a.vessels().len().min(MAX_VESSELS);
+        let mut heights = [1.0; MAX_VESSELS];
+        for (i, c) in heights.iter_mut().enumerate().take(n) {
+            *c = self.shape_of(a, i, input, face, 0.0).1.height_ratio;
+        }
+        (heights, n)
+    }
+
+    /// The lumen of vessel `i` ([`Renderer::shape_of`]) carried by its
+    /// collapsing neighbours ([`crate::carry`]).
+    fn carried_lumen(&self, a: &Anatomy, i: usize, input: &FrameInput, face: f64) -> Lumen {
+        let (heights, n) = self.height_ratios(a, input, face);
+        let pan_m = self.pan(input.lateral_offset).0;
+        let table = carried(a, &heights[..n], input.deformation, pan_m);
+        let by = table.iter().filter_map(|row| row[i]).map(|(_, d)| d).sum();
+        self.shape_of(a, i, input, face, by).0
+    }
+}
+
+/// Which vessel carries which ([`crate::carry`]): `table[k][j]` is the side
+/// (`true`: `j` above `k`) and the displacement `D_j` (m, tissue depth,
+/// positive downwards) by which vessel `k`'s warp, of height ratio
+/// `heights[k]`, carries vessel `j` stacked on it: `k`'s unheld warp at the
+/// point of `j`'s wall nearest to `k` in the column through `j`'s centre.
+/// `None` where `j` is not stacked on `k`, or `k`'s lumen does not collapse
+/// there (its warp's ratio, compensated for the column's strain, ≥ 1).
+pub(super) fn carried(
+    a: &Anatomy,
+    heights: &[f64],
+    def: &SectionDeformation,
+    pan_m: f64,
+) -> [[Option<(bool, f64)>; MAX_VESSELS]; MAX_VESSELS] {
+    let mut table = [[None; MAX_VESSELS]; MAX_VESSELS];
+    let vs = a.vessels();
+    for (k, (carrier, &c)) in vs.iter().zip(heights).enumerate() {
+        for (j, other) in vs.iter().enumerate().take(heights.len()) {
+            let (v, n) = (&carrier.vessel, &other.vessel);
+            let Some(above) = (j != k).then(|| stacked(v, n)).flatten() else {
+                continue;
+            };
+            let s = def.surface_at(n.lateral - pan_m);
+            let ratio = compensated_ratio(c, s, def.bone_depth);
+            if ratio >= 1.0 {
+                continue;
+            }
+            let w = VesselWarp::new(v, n.lateral, ratio).with_floor(a.femur_top());
+            let (mid, h) = n.chord(n.lateral, n.wall);
+            let near = if above { mid + h } else { mid - h };
+            table[k][j] = Some((above, w.apply(near) - near));
+        }
+    }
+    table
 }

@@ -2,7 +2,7 @@
 //! column, the vessels' lumens and warps, the widening lumens' lateral
 //! maps and the edge shadows.
 
-use super::lumens::VesselLumen;
+use super::lumens::{carried, VesselLumen};
 use super::{check_input, FrameInput, Renderer, NOISE_ROLL};
 use crate::anatomy_config::VeinState;
 use crate::deformation::column_depth;
@@ -29,15 +29,15 @@ impl Renderer {
         let mut heights = [1.0f64; MAX_VESSELS];
         let mut shapes = [LumenShape::default(); MAX_VESSELS];
         let mut lumens = [VesselLumen::default(); MAX_VESSELS];
+        let mut table = [[None; MAX_VESSELS]; MAX_VESSELS];
         let n = match &self.anatomy {
             Some(a) => {
                 let vs = a.vessels();
-                for (i, r) in ratios
-                    .iter_mut()
-                    .enumerate()
-                    .take(vs.len().min(MAX_VESSELS))
-                {
-                    let (l, shape) = self.shape_of(a, i, input, face);
+                let (c, n) = self.height_ratios(a, input, face);
+                table = carried(a, &c[..n], def, pan_m);
+                for (i, r) in ratios.iter_mut().enumerate().take(n) {
+                    let by = table.iter().filter_map(|row| row[i]).map(|(_, d)| d).sum();
+                    let (l, shape) = self.shape_of(a, i, input, face, by);
                     *r = l.area / vs[i].vessel.rest_area();
                     heights[i] = shape.height_ratio;
                     shapes[i] = shape;
@@ -71,13 +71,20 @@ impl Renderer {
             let set = &mut self.warps[b];
             set.clear();
             if let Some(a) = &self.anatomy {
-                for (sv, &r) in a.vessels().iter().zip(&heights[..n]) {
+                let (vs, floor) = (a.vessels(), a.femur_top());
+                for (k, (sv, &r)) in vs.iter().zip(&heights[..n]).enumerate() {
                     let mut w =
                         VesselWarp::new(&sv.vessel, u, compensated_ratio(r, s, def.bone_depth))
-                            .with_floor(a.femur_top());
+                            .with_floor(floor);
                     if let Some(c) = sv.condition() {
                         // A floating tail sways with breathing (issue 13).
                         w = w.with_tail(c.fill, c.tail_shift(input.time));
+                    }
+                    // The vessels stacked on this one ride its decay whole.
+                    for (other, carry) in vs.iter().zip(&table[k][..n]) {
+                        if let Some((above, d)) = *carry {
+                            w = w.carrying(&other.vessel, d, u, above, floor);
+                        }
                     }
                     set.push(w);
                 }
@@ -126,7 +133,25 @@ impl Renderer {
                 .clamp(0.0, (self.bin_u.len() - 1) as f64)
                 as usize];
             let bone = column_depth(s, g.bone, floor) - g.face;
-            let fade = v.half_height();
+            // The shift fades out before a vessel stacked on this one
+            // (`crate::carry`): the lateral map leaves it whole too.
+            let (mut up, mut down) = (v.half_height(), v.half_height().min(bone - bottom));
+            for other in a.vessels() {
+                let n = &other.vessel;
+                let Some(above) = crate::carry::stacked(v, n) else {
+                    continue;
+                };
+                let b = (((n.lateral - pan_m - self.bin_u[0]) / self.cfg.pixel_width())
+                    .round()
+                    .clamp(0.0, (self.bin_u.len() - 1) as f64)) as usize;
+                let (mid, h) = n.chord(n.lateral, n.wall);
+                let (s, w) = (self.surface[b], &self.warps[b]);
+                if above {
+                    up = up.min(top - image_depth(g, s, w, mid + h));
+                } else {
+                    down = down.min(image_depth(g, s, w, mid - h) - bottom);
+                }
+            }
             self.lateral_maps[self.map_count] = LateralMap::new(
                 x0,
                 v.half_width(),
@@ -134,8 +159,8 @@ impl Renderer {
                 shape.shift,
                 decay_lengths(a, i),
                 (top, bottom),
-                fade,
-                fade.min(bone - bottom),
+                up,
+                down,
             );
             self.map_count += 1;
         }
