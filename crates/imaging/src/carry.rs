@@ -19,13 +19,15 @@
 //! - `β = 1 − λ/M` (clamped to [0, 1]) in a column at the lateral distance
 //!   `λ` beyond `j`'s outer half-width `o_j`, `M = o_j`;
 //! - `ψ(x) = min(x/g, 1)` up to `j`'s far wall `x_f` in the column (from
-//!   0 at `i`'s wall, so `i`'s walls keep moving with its lumen; `g` at
-//!   least the height `x_n` of `j`'s near wall, so `ψ = 1` across `j`),
-//!   then `ψ(x_f) (1 − (x − x_f)/m)` down to 0 over `m` above it.
+//!   0 at `i`'s wall, so `i`'s walls keep moving with its lumen; `g` is
+//!   the height `x_n` of `j`'s near wall, or more where the monotonicity
+//!   bound below asks), then `ψ(x_f) (1 − (x − x_f)/m)` down to 0 over
+//!   `m ≥ o_j` above it.
 //!
-//! Where `β ψ = 1` (all of `j`'s lumen and wall in the columns it spans)
-//! the map is a translation by `D_j`: `j` keeps its shape and takes only
-//! its own warp. `D'` is continuous across columns (`β`, `j`'s chord and
+//! Where `β ψ = 1` (all of `j`'s lumen, and its wall but where `i`'s own
+//! wall in a column sinks less than `j` is carried) the map is a
+//! translation by `D_j`: `j` keeps its shape and takes only its own
+//! warp. `D'` is continuous across columns (`β`, `j`'s chord and
 //! `i`'s are) and in depth (`ψ` is), and equals `D` beyond `j`'s margin.
 //!
 //! The map stays increasing. With `z` the depth (`x` grows upwards) the
@@ -37,11 +39,13 @@
 //! `D_j = D(x_n)`, so neither happens (`D ≥ D_j` below `x_n`, `D ≤ D_j`
 //! above `x_f`); in the others `g ≥ 1.5 β (D_j − D(x_n))` and
 //! `m ≥ 1.5 β (D(x_f) − D_j)` keep the term above −2/3 at the ramps' ends
-//! (`crate::warp`'s bound of 1/3); `continuous_increasing_and_carried`
-//! checks the slope over the whole map. The same holds below `i` with `x`
-//! the depth under its lower wall and the signs of `D` and `D_j − D` flipped. A lumen that expands (`k < 0`: a
-//! systole, a column-strain compensation, a Valsalva distension) carries
-//! nothing: its decay is the old one.
+//! (`crate::warp`'s bound of 1/3); this is a bound at the ramps' ends,
+//! not everywhere, so `the_carried_map_is_increasing_continuous_and_local`
+//! checks the slope over the whole map of the section where it matters.
+//! The same holds below `i` with `x` the depth under its lower wall and
+//! the signs of `D` and `D_j − D` flipped. A lumen that expands (`k < 0`:
+//! a systole, a column-strain compensation, a Valsalva distension)
+//! carries nothing: its decay is the old one.
 //!
 //! The warps of one column are summed, each at the tissue point
 //! ([`crate::warp::WarpSet`]), so `j`'s own warp still acts about `j`'s

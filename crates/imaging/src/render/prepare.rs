@@ -99,7 +99,9 @@ impl Renderer {
     /// `shapes` (one per vessel): each vessel's band is its walls' depth
     /// span in the frame (through the columns it crosses, after the
     /// warps); the shift fades over the vessel's rest half-height above it
-    /// and the same below, ending at the femur's top.
+    /// and the same below, ending at the femur's top and at the near wall
+    /// of a vessel stacked on it ([`crate::carry::stacked`], through that
+    /// vessel's centre column), which it leaves whole.
     fn lateral_maps(&mut self, shapes: &[LumenShape], pan_m: f64) {
         self.map_count = 0;
         let Some(a) = &self.anatomy else {
