@@ -42,6 +42,7 @@ mod anatomy;
 mod anatomy_config;
 mod beam;
 mod beam_config;
+mod carry;
 #[cfg(target_arch = "x86_64")]
 mod compress_avx2;
 mod config;
@@ -49,6 +50,7 @@ mod deformation;
 mod edge_shadow;
 mod enhancement;
 mod error;
+mod lateral_map;
 mod material;
 mod measure;
 mod output;
@@ -71,6 +73,7 @@ mod texture;
 mod tissue;
 mod vein_condition;
 mod warp;
+mod widen;
 
 pub use anatomy::{Anatomy, LumenLaw, SectionVessel, Vessel, MAX_BREAKPOINTS};
 pub use anatomy_config::{AnatomyConfig, VeinState, VeinStateParams, MMHG};
@@ -93,3 +96,4 @@ pub use texture::TextureConfig;
 pub use tissue::{Acoustics, Tissue};
 pub use vein_condition::{CollapseLaw, ContentLayout, VeinCondition, BREATHING_RATE, TAIL_SWING};
 pub use warp::VesselWarp;
+pub use widen::{ellipse_perimeter, wall_length_half_width};

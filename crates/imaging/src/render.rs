@@ -10,30 +10,37 @@
 //! 4. per-column attenuation/TGC and log compression, then the transpose
 //!    into the row-major output (row = depth).
 
-use crate::anatomy::{Anatomy, Vessel};
+use crate::anatomy::Anatomy;
 use crate::anatomy_config::VeinState;
 use crate::config::ImagingConfig;
-use crate::deformation::{column_depth, SectionDeformation};
+use crate::deformation::SectionDeformation;
 use crate::edge_shadow::EdgeShadows;
 use crate::enhancement::LossBlur;
 use crate::error::ImagingError;
+use crate::lateral_map::{LateralMap, RemapScratch};
 use crate::material::MaterialWindow;
-use crate::pressure::stress_under_rectangle;
 use crate::psf::PsfTables;
-use crate::reverberation::{LumenSpan, Reverberation};
+use crate::reverberation::Reverberation;
 use crate::scatterers::ScattererField;
 use crate::smoke::{Smoke, SmokePhase, ROLL as SMOKE_ROLL};
 use crate::specular::SpecularField;
 use crate::stage_times::{wall_seconds, Lap, StageTimes};
 use crate::stages::{
-    column_loss, compress_column, convolve_frame, image_depth, splat_add, splat_column, Additive,
-    FrameGeometry, LogCompression,
+    column_loss, compress_column, convolve_frame, splat_add, splat_column, FrameGeometry,
+    LogCompression,
 };
-use crate::warp::{compensated_ratio, VesselWarp, WarpSet, MAX_VESSELS};
+use crate::warp::{WarpSet, MAX_VESSELS};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use std::sync::Arc;
+
+mod fields;
+mod lumens;
+mod prepare;
+
+use fields::{correlation_length, smoothed_gaussian, Additives, ExtraEchoes};
+use lumens::VesselLumen;
+pub use lumens::{Lumen, LumenReport};
 
 /// What the application supplies each frame.
 #[derive(Debug, Clone, Copy)]
@@ -51,34 +58,6 @@ pub struct FrameInput<'a> {
     /// to the lateral pixel pitch and clamped to `±imaging.pan_range`
     /// ([`Renderer::pan`]).
     pub lateral_offset: f64,
-}
-
-/// The state of one vessel's lumen in a frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Lumen {
-    /// Lumen area (m²).
-    pub area: f64,
-    /// Lumen area at rest (m²).
-    pub rest_area: f64,
-    /// Tissue pressure at the vessel (Pa), from the probe pressure.
-    pub tissue_pressure: f64,
-    /// Lateral position of the centre (m, image frame).
-    pub lateral: f64,
-    /// Depth of the deformed lumen's centre below the probe face (m).
-    pub depth: f64,
-    /// Half-height of the deformed lumen (m).
-    pub half_height: f64,
-    /// Half-width of the lumen (m).
-    pub half_width: f64,
-}
-
-/// Vein and artery lumens of a frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LumenReport {
-    /// The femoral vein.
-    pub vein: Lumen,
-    /// The femoral artery.
-    pub artery: Lumen,
 }
 
 /// A test medium without anatomy: attenuation equals the TGC's, no vessels.
@@ -170,6 +149,12 @@ pub struct Renderer {
     /// The vessels' lumens of the current frame (the first `lumen_count`).
     lumens: [VesselLumen; MAX_VESSELS],
     lumen_count: usize,
+    /// The lateral maps of the current frame's widening lumens
+    /// ([`crate::lateral_map`]; the first `map_count`).
+    lateral_maps: [LateralMap; MAX_VESSELS],
+    map_count: usize,
+    /// Work memory of the lateral maps.
+    remap_scratch: RemapScratch,
     /// The smoke's fields at the frame's time, `None` when the studied
     /// vein holds none (closed, thrombosed, or smoke off).
     smoke_phase: Option<SmokePhase>,
@@ -177,32 +162,6 @@ pub struct Renderer {
     stage_clock: fn() -> f64,
     /// The last frame's stage times.
     times: StageTimes,
-}
-
-/// A vessel's lumen in a frame (image frame, m).
-#[derive(Debug, Clone, Copy, Default)]
-struct VesselLumen {
-    lateral: f64,
-    depth: f64,
-    half_height: f64,
-    half_width: f64,
-    wall: f64,
-}
-
-impl VesselLumen {
-    /// The lumen's span in the column at lateral `u` (m, image frame), as
-    /// an ellipse of the lumen's half-width and half-height.
-    fn span(&self, u: f64) -> Option<LumenSpan> {
-        let x = (u - self.lateral) / self.half_width;
-        (x.abs() < 1.0 && self.half_height > 0.0).then(|| {
-            let h = self.half_height * (1.0 - x * x).sqrt();
-            LumenSpan {
-                top: self.depth - h,
-                bottom: self.depth + h,
-                wall: self.wall,
-            }
-        })
-    }
 }
 
 impl Renderer {
@@ -418,6 +377,9 @@ impl Renderer {
             muscle_amp,
             lumens: [VesselLumen::default(); MAX_VESSELS],
             lumen_count: 0,
+            lateral_maps: [LateralMap::default(); MAX_VESSELS],
+            map_count: 0,
+            remap_scratch: RemapScratch::new(bins, cfg.rows),
             smoke_phase: None,
             stage_clock: wall_seconds,
             times: StageTimes::default(),
@@ -486,205 +448,6 @@ impl Renderer {
     /// First field bin of the window at pan `p` columns.
     fn window_start(&self, p: isize) -> usize {
         (self.field.pan as isize + p) as usize
-    }
-
-    fn lumen_of(
-        &self,
-        v: &Vessel,
-        input: &FrameInput,
-        face: f64,
-        ratio_of: impl Fn(f64) -> f64,
-    ) -> Lumen {
-        let def = input.deformation;
-        // The vessel in the image's frame.
-        let lateral = v.lateral - self.pan(input.lateral_offset).0;
-        let s = def.surface_at(lateral);
-        let centre = column_depth(s, def.bone_depth, v.depth) - face;
-        let p = stress_under_rectangle(
-            input.probe_pressure.max(0.0),
-            self.cfg.probe_width,
-            self.cfg.probe_elevation,
-            lateral,
-            0.0,
-            centre.max(0.0),
-        );
-        let ratio = ratio_of(p);
-        let warp = VesselWarp::new(v, v.lateral, compensated_ratio(ratio, s, def.bone_depth));
-        let (c, h) = v.chord(v.lateral, 0.0);
-        let top = column_depth(s, def.bone_depth, warp.apply(c - h)) - face;
-        let bottom = column_depth(s, def.bone_depth, warp.apply(c + h)) - face;
-        Lumen {
-            area: ratio * v.rest_area(),
-            rest_area: v.rest_area(),
-            tissue_pressure: p,
-            lateral,
-            depth: 0.5 * (top + bottom),
-            half_height: 0.5 * (bottom - top),
-            half_width: v.half_width(),
-        }
-    }
-
-    /// Sets the studied vein's (vessel 0's) distension: its lumen's height
-    /// drawn `factor` times its law's (the rise of the vein's
-    /// antero-posterior diameter during a Valsalva strain, issue 17; the
-    /// lumen reports follow). Clamped to 1–4 (a diameter up to +300 %, the
-    /// flow model's accepted range); a non-finite factor is 1.
-    pub fn set_vein_distension(&mut self, factor: f64) {
-        self.vein_distension = if factor.is_finite() {
-            factor.clamp(1.0, 4.0)
-        } else {
-            1.0
-        };
-    }
-
-    /// The distension factor of vessel `i` (the studied vein's, else 1).
-    fn distension_of(&self, i: usize) -> f64 {
-        if i == 0 {
-            self.vein_distension
-        } else {
-            1.0
-        }
-    }
-
-    /// The vein's and artery's lumens for `input` (`None` for a phantom).
-    /// Lumen areas follow [`Anatomy::vein_lumen_area`] and
-    /// [`Anatomy::artery_lumen_area`] at the tissue pressure that reaches
-    /// each vessel's centre ([`crate::pressure`]).
-    pub fn lumens(&self, input: &FrameInput) -> Result<Option<LumenReport>, ImagingError> {
-        check_input(input)?;
-        let Some(a) = &self.anatomy else {
-            return Ok(None);
-        };
-        let face = input.deformation.face_depth(0.5 * self.cfg.width);
-        Ok(Some(LumenReport {
-            vein: self.lumen_of(a.vein(), input, face, |p| {
-                a.vein_lumen_ratio(p) * self.vein_distension
-            }),
-            artery: self.lumen_of(a.artery(), input, face, |p| {
-                a.artery_lumen_ratio(p, input.time)
-            }),
-        }))
-    }
-
-    /// The lumen of vessel `i` of [`Anatomy::vessels`] for `input` (`None`
-    /// for a phantom or past the last vessel), by that vessel's own lumen
-    /// law at the tissue pressure at its centre.
-    pub fn vessel_lumen(
-        &self,
-        i: usize,
-        input: &FrameInput,
-    ) -> Result<Option<Lumen>, ImagingError> {
-        check_input(input)?;
-        let Some(a) = &self.anatomy else {
-            return Ok(None);
-        };
-        let Some(sv) = a.vessels().get(i) else {
-            return Ok(None);
-        };
-        let face = input.deformation.face_depth(0.5 * self.cfg.width);
-        Ok(Some(self.lumen_of(&sv.vessel, input, face, |p| {
-            a.lumen_ratio(i, p, input.time) * self.distension_of(i)
-        })))
-    }
-
-    /// Stage 1: frame geometry, per-column skin displacement and warps.
-    fn prepare(&mut self, input: &FrameInput) -> Result<(), ImagingError> {
-        let def = input.deformation;
-        let face = def.face_depth(0.5 * self.cfg.width);
-        self.geometry.face = face;
-        self.geometry.bone = def.bone_depth;
-        let (pan_m, pan) = self.pan(input.lateral_offset);
-        self.pan_columns = pan;
-        // Electronic noise changes from frame to frame (deterministically in time).
-        let tick = (input.time * 1e3).round().rem_euclid(1e6) as usize;
-        self.noise_roll = tick.wrapping_mul(2_654_435_761) % NOISE_ROLL;
-        check_input(input)?;
-        let mut ratios = [1.0f64; MAX_VESSELS];
-        let mut lumens = [VesselLumen::default(); MAX_VESSELS];
-        let n = match &self.anatomy {
-            Some(a) => {
-                let vs = a.vessels();
-                for (i, r) in ratios.iter_mut().enumerate().take(vs.len()) {
-                    let l = self.lumen_of(&vs[i].vessel, input, face, |p| {
-                        a.lumen_ratio(i, p, input.time) * self.distension_of(i)
-                    });
-                    *r = l.area / vs[i].vessel.rest_area();
-                    lumens[i] = VesselLumen {
-                        lateral: l.lateral,
-                        depth: l.depth,
-                        half_height: l.half_height,
-                        half_width: l.half_width,
-                        wall: vs[i].vessel.wall,
-                    };
-                }
-                vs.len().min(MAX_VESSELS)
-            }
-            None => 0,
-        };
-        self.lumens = lumens;
-        self.lumen_count = n;
-        // Smoke only in a patent studied vein (blood, not thrombus).
-        let patent = self
-            .anatomy
-            .as_ref()
-            .is_some_and(|a| a.state() == VeinState::Healthy && n > 0);
-        self.smoke_phase = match &self.smoke {
-            Some(s) if patent => Some(s.phase(input.time)),
-            _ => None,
-        };
-        for (b, &u_image) in self.bin_u.iter().enumerate() {
-            let s = def.surface_at(u_image);
-            self.surface[b] = s;
-            let u = u_image + pan_m;
-            let set = &mut self.warps[b];
-            set.clear();
-            if let Some(a) = &self.anatomy {
-                for (sv, &r) in a.vessels().iter().zip(&ratios[..n]) {
-                    let mut w =
-                        VesselWarp::new(&sv.vessel, u, compensated_ratio(r, s, def.bone_depth))
-                            .with_floor(a.femur_top());
-                    if let Some(c) = sv.condition() {
-                        // A floating tail sways with breathing (issue 13).
-                        w = w.with_tail(c.fill, c.tail_shift(input.time));
-                    }
-                    set.push(w);
-                }
-            }
-        }
-        self.edge_shadows(&ratios[..n], pan_m);
-        Ok(())
-    }
-
-    /// The refraction edge shadows of the frame ([`crate::edge_shadow`]):
-    /// the two lateral margins of each vessel (its wall's lateral extremes;
-    /// lumen area `ratios[i]` of rest), in the image through the column of
-    /// each margin.
-    fn edge_shadows(&mut self, ratios: &[f64], pan_m: f64) {
-        self.shadows.clear();
-        let Some(a) = &self.anatomy else {
-            return;
-        };
-        let dx = self.cfg.pixel_width();
-        let (u0, last) = (self.bin_u[0], self.bin_u.len() - 1);
-        for (sv, &r) in a.vessels().iter().zip(ratios) {
-            let v = &sv.vessel;
-            let hw = v.half_width();
-            // The vessel's top in the image, through the column at its
-            // centre, 1 mm higher for the chord's rise off the centre
-            // line in a rotated vessel.
-            let (c, h) = v.chord(v.lateral, v.wall);
-            let bc = (((v.lateral - pan_m - u0) / dx).round().max(0.0) as usize).min(last);
-            let top = image_depth(&self.geometry, self.surface[bc], &self.warps[bc], c - h) - 1e-3;
-            for s in [-1.0, 1.0] {
-                // 10 µm inside the margin, where the chord exists.
-                let ua = v.lateral + s * (hw - 1e-5);
-                let ui = v.lateral + s * v.chord_half_width(v.wall) - pan_m;
-                let b = (((ui - u0) / dx).round().max(0.0) as usize).min(last);
-                let d = v.chord(ua, 0.0).0;
-                let z = image_depth(&self.geometry, self.surface[b], &self.warps[b], d);
-                self.shadows.push(ui, z, top, r);
-            }
-        }
     }
 
     /// Renders one frame into `out` (`columns · rows` bytes, row-major, row
@@ -762,6 +525,21 @@ impl Renderer {
                 col,
             );
         }
+        // The widening lumens move the splatted echo across columns.
+        let (dz, dx, u_first) = (g.dz, self.cfg.pixel_width(), self.bin_u[0]);
+        for m in &self.lateral_maps[..self.map_count] {
+            let rows = self.cfg.rows;
+            m.remap(
+                &mut self.rf,
+                pr,
+                self.pad,
+                rows,
+                dz,
+                u_first,
+                dx,
+                &mut self.remap_scratch,
+            );
+        }
         self.times.prepare += prepared; // the specular interfaces' depths
         self.times.splat = lap.lap();
         let rows = self.cfg.rows;
@@ -791,8 +569,16 @@ impl Renderer {
         // Loss exponents of every column, then each column's as the beam
         // sees it near the vessels' margins (`crate::enhancement`), with
         // the edge shadows, and the compression.
+        // A column crossing a widened lumen takes the loss of its source
+        // column through the lumen's band (the map at full weight): the
+        // enhancement below the lumen widens with it.
+        let last = self.bin_u.len() - 1;
         for (j, x) in self.loss.chunks_mut(rows).enumerate() {
-            let b = j + h;
+            let mut u = self.bin_u[j + h];
+            for m in self.lateral_maps[..self.map_count].iter().rev() {
+                u = m.source(u, 1.0);
+            }
+            let b = (((u - self.bin_u[0]) / dx).round().max(0.0) as usize).min(last);
             column_loss(
                 &self.lc,
                 g,
@@ -933,138 +719,6 @@ fn check_input(input: &FrameInput) -> Result<(), ImagingError> {
         });
     }
     Ok(())
-}
-
-/// The echoes added to a column's scatterer echo before its attenuation:
-/// reverberation ([`crate::reverberation`]) and smoke ([`crate::smoke`]).
-struct ExtraEchoes<'a> {
-    reverb: Option<&'a Reverberation>,
-    smoke: Option<(&'a Smoke, SmokePhase)>,
-    lumens: &'a [VesselLumen],
-    muscle: &'a [f32],
-    /// The frame's pan (columns): image column `j` is tissue column `j + pan`.
-    pan: i64,
-    /// Depth of the deep fascia's bottom below the rest skin (m).
-    fascia: f64,
-}
-
-impl ExtraEchoes<'_> {
-    /// Adds them to column `j` (lateral `u`, m, image frame; skin
-    /// displacement `surface`, m).
-    #[inline(always)]
-    fn column(&self, g: &FrameGeometry, j: usize, u: f64, surface: f64, iq: &mut [[f32; 2]]) {
-        if let Some(r) = self.reverb {
-            r.near_field(
-                iq,
-                g.dz,
-                column_depth(surface, g.bone, self.fascia) - g.face,
-            );
-            for l in self.lumens {
-                if let Some(span) = l.span(u) {
-                    r.lumen(iq, j as i64 + self.pan, g.dz, self.muscle, span);
-                }
-            }
-        }
-        if let (Some((s, phase)), Some(vein)) = (self.smoke, self.lumens.first()) {
-            if let Some(span) = vein.span(u) {
-                s.add(iq, j, phase, g.dz, self.muscle, (span.top, span.bottom));
-            }
-        }
-    }
-}
-
-/// The frame's clutter and noise fields, shared by the column stages.
-struct Additives<'a> {
-    clutter: &'a [[f32; 2]],
-    clutter_amp: &'a [f32],
-    noise: &'a [[f32; 2]],
-    noise_amp: f32,
-    roll: usize,
-    rows: usize,
-}
-
-impl<'a> Additives<'a> {
-    fn column(&self, j: usize) -> Additive<'a> {
-        let r = self.rows;
-        let n = (j + self.roll) * r;
-        Additive {
-            clutter: &self.clutter[j * r..(j + 1) * r],
-            clutter_amp: self.clutter_amp,
-            noise: &self.noise[n..n + r],
-            noise_amp: self.noise_amp,
-        }
-    }
-}
-
-/// `cols × rows` circular Gaussian samples (column-major) of unit mean
-/// power after smoothing by `[¼, ½, ¼]` along the rows and, if `lateral`,
-/// along the columns too (each pass divides the power by 3/8).
-fn smoothed_gaussian(
-    rng: &mut ChaCha8Rng,
-    cols: usize,
-    rows: usize,
-    lateral: bool,
-) -> Vec<[f32; 2]> {
-    let mut sample = || -> f32 { StandardNormal.sample(rng) };
-    let raw: Vec<[f32; 2]> = (0..cols * rows).map(|_| [sample(), sample()]).collect();
-    let at = |v: &[[f32; 2]], c: usize, r: usize| v[c * rows + r];
-    let mut ax = vec![[0.0f32; 2]; cols * rows];
-    for c in 0..cols {
-        for r in 0..rows {
-            let (a, b, d) = (
-                at(&raw, c, r.saturating_sub(1)),
-                at(&raw, c, r),
-                at(&raw, c, (r + 1).min(rows - 1)),
-            );
-            for q in 0..2 {
-                ax[c * rows + r][q] = 0.25 * a[q] + 0.5 * b[q] + 0.25 * d[q];
-            }
-        }
-    }
-    let mut power: f64 = 3.0 / 8.0 * 2.0; // two unit-variance quadratures
-    if lateral {
-        let mut lat = vec![[0.0f32; 2]; cols * rows];
-        for c in 0..cols {
-            for r in 0..rows {
-                let (a, b, d) = (
-                    at(&ax, c.saturating_sub(1), r),
-                    at(&ax, c, r),
-                    at(&ax, (c + 1).min(cols - 1), r),
-                );
-                for q in 0..2 {
-                    lat[c * rows + r][q] = 0.25 * a[q] + 0.5 * b[q] + 0.25 * d[q];
-                }
-            }
-        }
-        ax = lat;
-        power *= 3.0 / 8.0;
-    }
-    let scale = (1.0 / power).sqrt() as f32;
-    for v in &mut ax {
-        v[0] *= scale;
-        v[1] *= scale;
-    }
-    ax
-}
-
-/// `Σ_Δ |R(Δ)|² / |R(0)|²` (samples) of a sampled complex kernel, `R` its
-/// autocorrelation.
-fn correlation_length(h: &[[f64; 2]]) -> f64 {
-    let n = h.len() as i64;
-    let r = |d: i64| {
-        let mut acc = [0.0, 0.0];
-        for i in 0..n {
-            let j = i + d;
-            if (0..n).contains(&j) {
-                let (a, b) = (h[i as usize], h[j as usize]);
-                acc[0] += a[0] * b[0] + a[1] * b[1];
-                acc[1] += a[0] * b[1] - a[1] * b[0];
-            }
-        }
-        acc[0] * acc[0] + acc[1] * acc[1]
-    };
-    let r0 = r(0);
-    (-(n - 1)..n).map(|d| r(d) / r0).sum()
 }
 
 #[cfg(all(test, target_arch = "x86_64"))]

@@ -27,14 +27,14 @@
 //! moved the upper wall by `2k` over `1.5 b`, stretched by up to 2.3, 3.7
 //! dB, and the upper wall with it).
 //!
-//! The warp is vertical only (the scatterers are binned by column), so the
-//! lumen keeps its rest width in the image until the walls meet. A tube
-//! whose wall keeps its length (perimeter `P = 2π r` for a circle of radius
-//! `r`) would widen as it flattens: a line of half-width `a` has perimeter
-//! `4a`, so `a → π r / 2 ≈ 1.57 r`. Drawing that needs lateral motion of
-//! the scatterers across columns and is left out.
+//! The warp is vertical only (the scatterers are binned by column). The
+//! lumen's widening as it flattens (a wall that keeps its length,
+//! [`crate::widen`]) is drawn after the splat by a lateral map of the
+//! echo across columns ([`crate::lateral_map`]); the ratio given here is
+//! then the lumen's height ratio, not its area ratio.
 
 use crate::anatomy::Vessel;
+use crate::carry::Carry;
 
 /// The warp ratio that gives a lumen of height ratio `ratio` in space in a
 /// column compressed by the skin displacement `surface` (m) towards the femur
@@ -66,6 +66,10 @@ pub struct VesselWarp {
     band: f64,
     /// Displacement of that band within the lumen (m).
     band_shift: f64,
+    /// A neighbour carried through the decay above ([`crate::carry`]).
+    above: Carry,
+    /// A neighbour carried through the decay below.
+    below: Carry,
 }
 
 impl VesselWarp {
@@ -97,7 +101,58 @@ impl VesselWarp {
             hi: centre + h + wall + below,
             band: 0.0,
             band_shift: 0.0,
+            above: Carry::default(),
+            below: Carry::default(),
         }
+    }
+
+    /// The unheld displacement (m) of the decay above (`above`) or below
+    /// at the distance `x` (m) from the outer wall.
+    #[inline]
+    fn decay_at(&self, above: bool, x: f64) -> f64 {
+        if above {
+            self.shift * (1.0 - x / self.decay).max(0.0)
+        } else {
+            -self.shift * (1.0 - x / self.decay_below).max(0.0)
+        }
+    }
+
+    /// This warp carrying `neighbour` rigidly by `target` (m) through its
+    /// decay above (`above`) or below ([`crate::carry`]) in the column
+    /// `u` (m, tissue frame). Only a collapsing lumen (ratio < 1) carries,
+    /// one neighbour a side (the first given); below, nothing is carried
+    /// past `floor` (m, the femur's top).
+    pub fn carrying(
+        mut self,
+        neighbour: &Vessel,
+        target: f64,
+        u: f64,
+        above: bool,
+        floor: f64,
+    ) -> Self {
+        let taken = if above { &self.above } else { &self.below };
+        if self.ratio >= 1.0 || taken.is_active() {
+            return self;
+        }
+        let h = self.half_height;
+        let wall = if above {
+            self.centre - h - self.wall
+        } else {
+            self.centre + h + self.wall
+        };
+        let Some(c) = Carry::new(neighbour, target, u, wall, above, |x| {
+            self.decay_at(above, x)
+        }) else {
+            return self;
+        };
+        if above {
+            self.above = c;
+            self.lo = self.lo.min(wall - c.reach());
+        } else if wall + c.reach() < floor {
+            self.below = c;
+            self.hi = self.hi.max(wall + c.reach());
+        }
+        self
     }
 
     /// This warp with the tissue below the vessel held from depth `floor`
@@ -147,24 +202,29 @@ impl VesselWarp {
     /// Whether the warp moves anything in this column.
     #[inline]
     pub fn is_active(&self) -> bool {
-        self.half_height > 0.0 && (self.shift != 0.0 || self.band_shift != 0.0)
+        (self.half_height > 0.0 && (self.shift != 0.0 || self.band_shift != 0.0))
+            || self.above.is_active()
+            || self.below.is_active()
     }
 
     /// The warped depth (m) of the tissue point at depth `depth` (m).
     #[inline]
     pub fn apply(&self, depth: f64) -> f64 {
-        if depth <= self.lo || depth >= self.hi || self.half_height <= 0.0 {
+        if depth <= self.lo || depth >= self.hi {
             return depth;
         }
         let h = self.half_height;
+        if h <= 0.0 && !self.above.is_active() && !self.below.is_active() {
+            return depth;
+        }
         let mut eta = depth - self.centre;
         if eta < -h {
             let x = (-h - eta - self.wall).max(0.0);
-            return depth + self.shift * (1.0 - x / self.decay);
+            return depth + self.above.apply(x, self.decay_at(true, x));
         }
         if eta > h {
             let x = (eta - h - self.wall).max(0.0);
-            return depth - self.shift * (1.0 - x / self.decay_below);
+            return depth + self.below.apply(x, self.decay_at(false, x));
         }
         if self.band_shift != 0.0 {
             eta = self.tail_map(eta);
@@ -204,10 +264,19 @@ impl WarpSet {
         self.n > 0
     }
 
-    /// The warped depth (m) of the tissue point at `depth` (m).
+    /// The warped depth (m) of the tissue point at `depth` (m): the sum of
+    /// the warps' displacements, each at the tissue point (each vessel's
+    /// warp is defined about its rest axis; a carried neighbour,
+    /// [`crate::carry`], then takes its own warp whole plus a translation).
     #[inline]
     pub fn apply(&self, depth: f64) -> f64 {
-        self.w[..self.n].iter().fold(depth, |d, w| w.apply(d))
+        match self.n {
+            0 => depth,
+            1 => self.w[0].apply(depth),
+            _ => self.w[..self.n]
+                .iter()
+                .fold(depth, |y, w| y + (w.apply(depth) - depth)),
+        }
     }
 }
 
