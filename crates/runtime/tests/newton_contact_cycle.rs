@@ -59,12 +59,14 @@ fn direct_exam_steps_converge_without_cycling_the_contact_set() {
     assert_eq!(steps.len(), ticks, "one physics step per direct tick");
     let cap = s.integrator.newton_max_iterations;
     // The bound: a converging step needs one solve for the step's load and
-    // at most one more per change of the contact's active set (a sample
-    // entering or leaving stops being a kink once the set is settled), and
-    // Newton on the smooth part then reduces the residual below newton_tol
-    // (2e-2) in one or two more: 4 solves. A step at the cap (8) did not
-    // converge; a cycle between two sets never does.
-    let bound = 4;
+    // one more per change of the contact's active set that its first solve
+    // makes (a sample entering or leaving: a kink of the force, after which
+    // Newton is on one linear piece), then the relative test (newton_tol,
+    // 2e-2) holds after the next solve, since on a linear piece one solve
+    // leaves the PCG's own residual (cg_tol, 1e-2; the springs are nearly
+    // linear over a 1 ms step's motion): 1 + 1 + 1 = 3. A step at
+    // the cap (8) did not converge; a cycle between two sets never does.
+    let bound = 3;
     let worst: Vec<(usize, u32)> = steps
         .iter()
         .copied()
@@ -76,6 +78,14 @@ fn direct_exam_steps_converge_without_cycling_the_contact_set() {
     for &n in steps {
         histogram[n.min(cap) as usize] += 1;
     }
+    let over_one: Vec<(usize, u32)> = steps
+        .iter()
+        .copied()
+        .enumerate()
+        .filter(|&(_, n)| n > 1)
+        .collect();
+    println!("steps per Newton iteration count (0..={cap}): {histogram:?}");
+    println!("steps of more than one iteration (tick, iterations): {over_one:?}");
     assert!(
         worst.is_empty(),
         "{} of {} steps took more than {bound} Newton iterations ({capped} at the cap of \
