@@ -65,7 +65,12 @@
 //! the Newton matrix is the same on both sides of the cap. (This is the
 //! discrete counterpart of Hunt & Crossley's objection to the linear
 //! spring–damper contact, J. Appl. Mech. 42, 1975: the damping force must
-//! vanish at zero penetration.) `h` is the step given to
+//! vanish at zero penetration.) With a blend `λ < 1` of Eq. 1 the force
+//! is evaluated at `x₀ + λ h v`, where `d = d₀ + λ h ḋ`: the cap still
+//! removes the jump, and also caps a sample already in whose depth grows
+//! faster than `d/h` (the default is `λ = 1`). The cap only lowers the
+//! damper's force and keeps its sign (`0 ≤ ḋ_c ≤ ḋ` when it acts): the
+//! contact stays passive. `h` is the step given to
 //! [`PenaltyContact::prepare`]; a query at `h = 0` keeps the last step's,
 //! so the wrench after a step is the force the step applied.
 
