@@ -37,6 +37,42 @@
 //! **No adhesion** (beyond the paper): when the damper would pull
 //! (`λ_c d + μ_c ḋ < 0`) the sample's force is clamped to zero and its
 //! Jacobian dropped.
+//!
+//! **Damper onset** (beyond the paper; issue 18). Eq. 2's damper makes the
+//! force jump at first touch: a sample reaching the surface at the rate
+//! `ḋ > 0` is pushed with `a_j μ_c ḋ` at zero depth, and nothing just before.
+//! Within an implicit step of `h` (`λ = 1`: the force is evaluated at
+//! `x₀ + h v`, the probe at its end pose) the depth and its rate are tied,
+//! `d = d₀ + h ḋ`, with `d₀` the sample's depth at the step's start, so a
+//! sample outside at the start (`d₀ < 0`) sees the force jump by
+//! `a_j μ_c |d₀| / h` as `d` crosses 0. The step's equations then have no
+//! root (the balance wants the sample exactly at the surface with a force
+//! inside the jump) and Newton cycles: the sample enters and leaves on
+//! alternate iterates, the residual never falls (the Newton 2-cycle of
+//! issue 18, four steps per direct exam at the 8-iteration cap). The
+//! damper is therefore made to act on the penetration only: its rate is
+//! capped at the rate of a penetration that began at the step's start,
+//!
+//! `ḋ_c = min(ḋ, d / h)`, so `F = a_j (λ_c d + μ_c ḋ_c)`,
+//!
+//! which changes nothing for a sample penetrating at the step's start
+//! (`d₀ ≥ 0` gives `ḋ = (d − d₀)/h ≤ d/h`) and gives an entering one the
+//! force `a_j (λ_c + μ_c/h) d`, continuous from zero. The force is then
+//! continuous and non-decreasing in the depth, a kink where the cap or the
+//! clamp starts, and the step's equations have their root. In the capped
+//! branch `∂F/∂x = −(λ_c + μ_c/h) a_j ββᵀ k̂k̂ᵀ` and `∂F/∂v = 0`, whose
+//! implicit-Euler combination `−(h² ∂F/∂x + h ∂F/∂v)` is the uncapped one:
+//! the Newton matrix is the same on both sides of the cap. (This is the
+//! discrete counterpart of Hunt & Crossley's objection to the linear
+//! spring–damper contact, J. Appl. Mech. 42, 1975: the damping force must
+//! vanish at zero penetration.) With a blend `λ < 1` of Eq. 1 the force
+//! is evaluated at `x₀ + λ h v`, where `d = d₀ + λ h ḋ`: the cap still
+//! removes the jump, and also caps a sample already in whose depth grows
+//! faster than `d/h` (the default is `λ = 1`). The cap only lowers the
+//! damper's force and keeps its sign (`0 ≤ ḋ_c ≤ ḋ` when it acts): the
+//! contact stays passive. `h` is the step given to
+//! [`PenaltyContact::prepare`]; a query at `h = 0` keeps the last step's,
+//! so the wrench after a step is the force the step applied.
 
 use crate::grid::SurfaceGrid;
 use crate::params::ContactParams;
@@ -63,8 +99,13 @@ pub struct SampleSurface {
 pub struct SampleContact {
     /// Penetration `d_j` (surface height above the face), m, > 0.
     pub depth: f64,
-    /// `ḋ_j`, m/s (positive while penetrating further).
+    /// `ḋ_j`, m/s (positive while penetrating further), as the damper
+    /// uses it: capped at `d_j / h` (see the module docs, damper onset).
     pub depth_rate: f64,
+    /// True if the cap `ḋ_j ≤ d_j / h` acted (the sample entered within the
+    /// step): its force is then `a_j (λ_c + μ_c/h) d_j`, with no velocity
+    /// dependence.
+    pub onset: bool,
     /// Force magnitude along `k̂` on the tissue, N (≥ 0), clamped.
     pub force: f64,
     /// True if the damper would have pulled and the force was clamped to 0.
@@ -103,6 +144,9 @@ pub struct PenaltyContact {
     n_sx: usize,
     n_sz: usize,
     surface: Vec<Option<SampleSurface>>,
+    /// Step `h` (s) of the damper-onset cap `ḋ ≤ d/h`, from the last
+    /// [`Self::prepare`] with `h > 0`; 0 until then (no cap).
+    onset_step: f64,
 }
 
 impl PenaltyContact {
@@ -168,6 +212,7 @@ impl PenaltyContact {
             samples_local,
             n_sx,
             n_sz,
+            onset_step: 0.0,
         }
     }
 
@@ -242,8 +287,12 @@ impl PenaltyContact {
     }
 
     /// [`Self::prepare`], also finding surfaces up to `below` (m) under the
-    /// face (used for the first-touch stiffness).
+    /// face (used for the first-touch stiffness). A step `h > 0` becomes
+    /// the damper-onset cap's (module docs); `h = 0` keeps the last one.
     pub fn prepare_with_reach(&mut self, x: &[Vec3], v: &[Vec3], h: f64, below: f64) {
+        if h.is_finite() && h > 0.0 {
+            self.onset_step = h;
+        }
         self.grid.rebuild(x);
         // The fastest node (one square root, and none for h = 0).
         let vmax = if h == 0.0 {
@@ -344,16 +393,37 @@ impl PenaltyContact {
         if depth.is_nan() || depth <= 0.0 || depth > self.probe.height {
             return None;
         }
-        let depth_rate = self.velocity.dot(&k) - vel;
+        let rate = self.velocity.dot(&k) - vel;
+        // Damper onset: ḋ_c = min(ḋ, d/h) (module docs).
+        let cap = if self.onset_step > 0.0 {
+            depth / self.onset_step
+        } else {
+            f64::INFINITY
+        };
+        let onset = rate > cap;
+        let depth_rate = if onset { cap } else { rate };
         let a = self.sample_area;
         let raw = a * (self.params.stiffness * depth + self.params.damping * depth_rate);
         let clamped = raw.is_nan() || raw < 0.0;
         Some(SampleContact {
             depth,
             depth_rate,
+            onset,
             force: if clamped { 0.0 } else { raw },
             clamped,
         })
+    }
+
+    /// The sample's `(−∂F/∂d, −∂F/∂ḋ)` per unit area (N/m³, N·s/m³) of a
+    /// contact that is not clamped: `(λ_c, μ_c)`, or `(λ_c + μ_c/h, 0)` where
+    /// the damper-onset cap acted (module docs).
+    fn rigidity(&self, c: &SampleContact) -> (f64, f64) {
+        let (lambda, mu) = (self.params.stiffness, self.params.damping);
+        if c.onset {
+            (lambda + mu / self.onset_step, 0.0)
+        } else {
+            (lambda, mu)
+        }
     }
 
     /// Net force and torque of the contact on the probe at `(x, v)`.
@@ -460,10 +530,10 @@ impl ForceModel for PenaltyContact {
         let k = self.direction();
         let kk: Matrix3<f64> = k * k.transpose();
         let a = self.sample_area;
-        let (lambda, mu) = (self.params.stiffness, self.params.damping);
         for s in self.surface.iter().flatten() {
             if let Some(c) = self.sample_contact(s, x, v) {
                 if !c.clamped {
+                    let (lambda, mu) = self.rigidity(&c);
                     let blocks = &self.tri_blocks[s.triangle];
                     Self::add_sample_block(kmat, blocks, &s.beta, &kk, lambda * a);
                     Self::add_sample_block(bmat, blocks, &s.beta, &kk, mu * a);
@@ -474,7 +544,8 @@ impl ForceModel for PenaltyContact {
 
     /// Direct assembly of `α ∂F/∂x + β ∂F/∂v` into `a`: one block per pair
     /// of a penetrating sample's triangle nodes, `−(α λ_c + β μ_c) a_j β_m β_n k̂k̂ᵀ`
-    /// (no scratch matrices, no pass over the whole pattern).
+    /// (no scratch matrices, no pass over the whole pattern; `λ_c + μ_c/h`
+    /// and 0 where the damper-onset cap acted).
     fn add_scaled_jacobians(
         &mut self,
         x: &[Vec3],
@@ -486,10 +557,11 @@ impl ForceModel for PenaltyContact {
     ) {
         let k = self.direction();
         let kk: Matrix3<f64> = k * k.transpose();
-        let c = (alpha * self.params.stiffness + beta * self.params.damping) * self.sample_area;
         for s in self.surface.iter().flatten() {
             if let Some(contact) = self.sample_contact(s, x, v) {
                 if !contact.clamped {
+                    let (lambda, mu) = self.rigidity(&contact);
+                    let c = (alpha * lambda + beta * mu) * self.sample_area;
                     Self::add_sample_block(a, &self.tri_blocks[s.triangle], &s.beta, &kk, c);
                 }
             }
@@ -497,7 +569,8 @@ impl ForceModel for PenaltyContact {
     }
 
     /// Edge-form assembly: each penetrating sample is the rank-one term
-    /// `−(α λ_c + β μ_c) a_j (β ⊗ k̂)(β ⊗ k̂)ᵀ` on its triangle.
+    /// `−(α λ_c + β μ_c) a_j (β ⊗ k̂)(β ⊗ k̂)ᵀ` on its triangle (`λ_c + μ_c/h`
+    /// and 0 where the damper-onset cap acted).
     fn add_scaled_jacobians_edge(
         &mut self,
         x: &[Vec3],
@@ -508,10 +581,11 @@ impl ForceModel for PenaltyContact {
         _scratch: &mut JacobianScratch,
     ) {
         let k = self.direction();
-        let c = (alpha * self.params.stiffness + beta * self.params.damping) * self.sample_area;
         for s in self.surface.iter().flatten() {
             if let Some(contact) = self.sample_contact(s, x, v) {
                 if !contact.clamped {
+                    let (lambda, mu) = self.rigidity(&contact);
+                    let c = (alpha * lambda + beta * mu) * self.sample_area;
                     // Triangle edges are mesh edges: in the side pattern.
                     let written = a.add_rank_one(s.nodes, s.beta, &k, -c);
                     debug_assert!(written.is_ok());
