@@ -8,6 +8,7 @@
 
 mod assembly;
 mod calibration;
+mod damper_onset;
 mod patients;
 mod queries;
 mod query_paths;

@@ -20,6 +20,7 @@ mod exam_run;
 mod exam_site;
 mod hold_ramp;
 mod image_physics;
+mod newton_contact_cycle;
 mod one_tick;
 mod patient_forces;
 mod patient_scale;
