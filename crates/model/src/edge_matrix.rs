@@ -305,7 +305,9 @@ impl EdgeMatrix {
             });
             return Ok(());
         }
-        let side = self.side_mut();
+        // `nodes` are this matrix's own indices (translated above), so the
+        // side matrix takes them while translating too.
+        let side = self.side_in_own_indices();
         for r in 0..3 {
             for s in 0..3 {
                 if r != s {
@@ -326,6 +328,11 @@ impl EdgeMatrix {
             !self.translating,
             "a translated force model must assemble edge terms, not the side matrix"
         );
+        self.side_in_own_indices()
+    }
+
+    /// [`Self::side_mut`] for terms already in this matrix's own indices.
+    fn side_in_own_indices(&mut self) -> &mut BlockSparse {
         if !self.side_active {
             if self.side_dirty {
                 self.side.clear();

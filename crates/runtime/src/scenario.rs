@@ -6,6 +6,7 @@
 
 use crate::coupling::CouplingConfig;
 use crate::exam_site::{ExamFrame, SiteConfig};
+use crate::live::CouplingMode;
 use anyhow::{bail, Context, Result};
 use echothigh_contact::{ContactParams, Probe};
 use echothigh_device::{DeviceConfig, ExamConfig, HandConfig};
@@ -317,12 +318,17 @@ impl Scenario {
         in_process_pair(self.run.seed, up, down)
     }
 
-    /// The physical model's part.
+    /// The physical model's part; in `direct` mode with
+    /// `coupling.direct_window`, the active window enabled.
     pub fn model_config(&self) -> ModelConfig {
+        let mut integrator = self.integrator.clone();
+        if self.coupling.mode == CouplingMode::Direct && self.coupling.direct_window {
+            integrator.window.enabled = true;
+        }
         ModelConfig {
             thigh: self.thigh.clone(),
             tissue: self.tissue.clone(),
-            integrator: self.integrator.clone(),
+            integrator,
         }
     }
 }

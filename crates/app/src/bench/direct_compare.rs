@@ -8,6 +8,13 @@
 //! (the order alternating), each tick timed in the thread's CPU time; the
 //! forces of the two must agree to the bit (the queries only read the
 //! model), which the report checks.
+//!
+//! With `--matrix-reuse N` and/or `--direct-window R` the second tick is
+//! instead the force-only tick whose physics reuses the Newton matrix for
+//! up to `N` steps (`integrator.matrix_reuse_steps`) and/or integrates only
+//! the active window of radius `R` m (`integrator.window`): its forces then
+//! differ within Newton's tolerance or the window's error, and the report
+//! gives the largest gap.
 
 use super::clock::{percentile, thread_cpu_us};
 use echothigh_model::StepTimings;
@@ -88,28 +95,75 @@ pub struct DirectCompare {
     pub ticks: usize,
     /// The real-time tick: physics and force only.
     pub force_only: TickCpu,
-    /// The tick with the haptic queries (the previous real-time tick).
+    /// The other tick: with the haptic queries (the previous real-time
+    /// tick), or force-only reusing the Newton matrix (`matrix_reuse_steps`
+    /// > 0).
     pub with_queries: TickCpu,
+    /// `integrator.matrix_reuse_steps` of the other tick.
+    pub matrix_reuse_steps: u32,
+    /// The other tick's active window radius (m; 0: none).
+    pub window_radius_m: f64,
+    /// Steps of the other tick that reused a matrix.
+    pub reused_steps: usize,
+    /// Newton iterations of the other tick's steps, summed.
+    pub other_newton_iterations: u64,
+    /// Newton iterations of the force-only tick's steps, summed.
+    pub force_only_newton_iterations: u64,
     /// `with_queries / force_only` of the medians.
     pub median_ratio: f64,
-    /// Largest `|F_a − F_b|` over the ticks (N; 0 expected).
+    /// Largest `|F_a − F_b|` over the ticks (N; 0 expected with the queries).
     pub max_force_gap_n: f64,
     /// The force-only side's ticks over the period (the first 50).
     pub long_ticks: Vec<LongTick>,
+    /// Median over the force-only side's ticks in contact of each stage of
+    /// the physics step (wall time, µs; [`StepTimings::NAMES`] order), and
+    /// of the ticks' thread-CPU time: where an ordinary tick's time goes.
+    pub contact_stage_medians_us: Vec<(String, f64)>,
+}
+
+/// The other tick's physics: with neither option it runs the queries.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct OtherTick {
+    /// `integrator.matrix_reuse_steps`.
+    pub matrix_reuse_steps: u32,
+    /// Active window radius (m; 0: no window).
+    pub window_radius_m: f64,
+}
+
+impl OtherTick {
+    /// True if the other tick is the tick with the queries.
+    pub fn queries(&self) -> bool {
+        self.matrix_reuse_steps == 0 && self.window_radius_m == 0.0
+    }
 }
 
 /// Runs `ticks` ticks of each side of the built-in scenario (a run longer
 /// than the exam holds the probe where the script ends).
-pub fn compare_direct(ticks: usize) -> anyhow::Result<DirectCompare> {
+pub fn compare_direct(ticks: usize, o: OtherTick) -> anyhow::Result<DirectCompare> {
     let mut s = Scenario::builtin()?;
     s.coupling.mode = CouplingMode::Direct;
+    // The reference side steps the whole mesh (the option's window is the
+    // other side's, when asked for).
+    s.coupling.direct_window = false;
     s.validate()?;
     let period = s.coupling.haptic_period();
     let scale = s.device().force_scale();
     let mut sides = Vec::new();
-    for queries in [false, true] {
-        let (_, source) = haptic_side_for(CouplingMode::Direct, &s)?;
-        let physics = PhysicsSide::new(&s)?;
+    for other in [false, true] {
+        let queries = other && o.queries();
+        let mut side = s.clone();
+        if other {
+            side.integrator.matrix_reuse_steps = o.matrix_reuse_steps;
+            if o.window_radius_m > 0.0 {
+                side.coupling.direct_window = true;
+                side.integrator.window.radius = o.window_radius_m;
+                side.integrator.window.margin =
+                    side.integrator.window.margin.min(o.window_radius_m);
+            }
+            side.validate()?;
+        }
+        let (_, source) = haptic_side_for(CouplingMode::Direct, &side)?;
+        let physics = PhysicsSide::new(&side)?;
         let mut tick = HapticTick::new(scripted_device(&s)?, source, scale, Some(physics), period);
         tick.set_orientation(s.probe_orientation()?);
         tick.set_direct_queries(queries);
@@ -122,6 +176,8 @@ pub fn compare_direct(ticks: usize) -> anyhow::Result<DirectCompare> {
     let mut gap = 0.0f64;
     let mut last = LastStep::default();
     let mut long_ticks = Vec::new();
+    let mut contact_stages: Vec<[f64; 10]> = Vec::with_capacity(ticks);
+    let mut reused_steps = 0;
     for i in 0..ticks {
         let now = i as f64 * period;
         let order = if i % 2 == 0 { [0, 1] } else { [1, 0] };
@@ -132,6 +188,15 @@ pub fn compare_direct(ticks: usize) -> anyhow::Result<DirectCompare> {
             let us = thread_cpu_us() - c0;
             let step = last.0.take().unwrap_or_default();
             cpu[k].push((us, step.newton_iterations));
+            // A step that solved but assembled nothing reused a matrix.
+            let reused = step.newton_iterations > 0 && step.stages.assembly == 0.0;
+            reused_steps += usize::from(k == 1 && reused);
+            if k == 0 && step.stages.contact > 0.0 {
+                let mut row = [0.0; 10];
+                row[..9].copy_from_slice(&step.stages.values().map(|v| v * 1e6));
+                row[9] = us;
+                contact_stages.push(row);
+            }
             if k == 0 && us > period * 1e6 && long_ticks.len() < 50 {
                 long_ticks.push(LongTick {
                     tick: i,
@@ -145,6 +210,9 @@ pub fn compare_direct(ticks: usize) -> anyhow::Result<DirectCompare> {
         }
         gap = gap.max((force[0] - force[1]).norm());
     }
+    let newton = |c: &[(f64, u32)]| c.iter().map(|t| u64::from(t.1)).sum::<u64>();
+    let (force_only_newton_iterations, other_newton_iterations) =
+        (newton(&cpu[0]), newton(&cpu[1]));
     let [a, b] = cpu;
     let (period_us, cap) = (period * 1e6, s.integrator.newton_max_iterations);
     let force_only = TickCpu::of(&a, period_us, cap);
@@ -155,7 +223,26 @@ pub fn compare_direct(ticks: usize) -> anyhow::Result<DirectCompare> {
         median_ratio: with_queries.median_us / force_only.median_us.max(1e-9),
         force_only,
         with_queries,
+        matrix_reuse_steps: o.matrix_reuse_steps,
+        window_radius_m: o.window_radius_m,
+        reused_steps,
+        other_newton_iterations,
+        force_only_newton_iterations,
         max_force_gap_n: gap,
         long_ticks,
+        contact_stage_medians_us: stage_medians(&contact_stages),
     })
+}
+
+/// Median of each column of `rows` (the nine stages, then the tick's CPU).
+fn stage_medians(rows: &[[f64; 10]]) -> Vec<(String, f64)> {
+    let names = StepTimings::NAMES.iter().copied().chain(["tick_cpu"]);
+    names
+        .enumerate()
+        .map(|(c, name)| {
+            let mut col: Vec<f64> = rows.iter().map(|r| r[c]).collect();
+            col.sort_by(f64::total_cmp);
+            (name.to_string(), percentile(&col, 0.5))
+        })
+        .collect()
 }

@@ -68,6 +68,15 @@ pub struct Args {
     /// queries, interleaved; 0: not run).
     #[arg(long, default_value_t = 0)]
     direct_ticks: usize,
+    /// With `--direct-ticks`: the second tick is the force-only tick with
+    /// `integrator.matrix_reuse_steps` = this (modified Newton) instead of
+    /// the tick with the queries (0: the queries).
+    #[arg(long, default_value_t = 0)]
+    matrix_reuse: u32,
+    /// With `--direct-ticks`: the second tick is the force-only tick
+    /// integrating only the active window of this radius (m; 0: none).
+    #[arg(long, default_value_t = 0.0)]
+    direct_window: f64,
     /// Rounds of the active window's A/B (10k press with and without the
     /// window, alternated; 0 skips it).
     #[arg(long, default_value_t = 3)]
@@ -237,10 +246,20 @@ fn run_compare(args: &Args) -> anyhow::Result<()> {
 }
 
 fn run_direct(args: &Args) -> anyhow::Result<()> {
-    let r = super::direct_compare::compare_direct(args.direct_ticks)?;
+    let o = super::direct_compare::OtherTick {
+        matrix_reuse_steps: args.matrix_reuse,
+        window_radius_m: args.direct_window,
+    };
+    let r = super::direct_compare::compare_direct(args.direct_ticks, o)?;
+    let other = match (o.matrix_reuse_steps, o.window_radius_m > 0.0) {
+        (0, false) => "with queries".to_string(),
+        (n, false) => format!("reuse ≤ {n}"),
+        (0, true) => format!("window {} mm", o.window_radius_m * 1e3),
+        (n, true) => format!("window+reuse {n}"),
+    };
     for (name, c) in [
         ("force only", &r.force_only),
-        ("with queries", &r.with_queries),
+        (other.as_str(), &r.with_queries),
     ] {
         eprintln!(
             "direct tick, {name:<12} ({} nodes, {} ticks): thread-CPU median {:.1} µs, p99 {:.1}, max {:.1}; {} ticks over 1 ms",
@@ -248,8 +267,22 @@ fn run_direct(args: &Args) -> anyhow::Result<()> {
         );
     }
     eprintln!(
-        "median ratio (with queries / force only) {:.2}; largest force gap {:.1e} N",
-        r.median_ratio, r.max_force_gap_n
+        "median ratio ({other} / force only) {:.2}; largest force gap {:.1e} N; Newton iterations {} / {}, {} steps reused a matrix",
+        r.median_ratio,
+        r.max_force_gap_n,
+        r.other_newton_iterations,
+        r.force_only_newton_iterations,
+        r.reused_steps
+    );
+    let stages: Vec<String> = r
+        .contact_stage_medians_us
+        .iter()
+        .filter(|(_, us)| *us > 0.0)
+        .map(|(name, us)| format!("{name} {us:.1}"))
+        .collect();
+    eprintln!(
+        "force-only ticks in contact, medians (µs): {}",
+        stages.join(", ")
     );
     let json = serde_json::json!({
         "bench": "physics_direct_tick",

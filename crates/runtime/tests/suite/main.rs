@@ -16,6 +16,7 @@ mod case_images;
 mod chronic_image;
 mod coaptation_along_leg;
 mod direct_force_only;
+mod direct_window;
 mod exam_run;
 mod exam_site;
 mod hold_ramp;
