@@ -78,10 +78,6 @@ pub struct StepStats {
     pub regularized: u32,
     /// True if Newton met its tolerance within the cap.
     pub converged: bool,
-    /// True if the step's first solve reused an earlier step's Newton
-    /// matrix ([`IntegratorParams::matrix_reuse_steps`]).
-    #[serde(default)]
-    pub matrix_reused: bool,
     /// False if the step produced a non-finite state; the state was then
     /// restored to the step's start (or `h` was not a positive finite number).
     pub finite: bool,
@@ -153,18 +149,6 @@ pub struct ImplicitEuler {
     v_eval: Vec<Vec3>,
     path: Vec<Vec3>,
     diag_scratch: Vec<f64>,
-    /// The Newton matrix held for reuse ([`IntegratorParams::matrix_reuse_steps`]).
-    held: Option<HeldMatrix>,
-}
-
-/// What the Newton matrix held in the integrator was assembled for.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct HeldMatrix {
-    /// Step `h` (s) and blend λ it was assembled with.
-    h: f64,
-    lambda: f64,
-    /// Steps committed since its assembly.
-    age: u32,
 }
 
 /// `v[i] = 0` where `fixed[i]`.
@@ -207,7 +191,6 @@ impl ImplicitEuler {
             v_eval: vecs(),
             path: vecs(),
             diag_scratch: vec![0.0; n],
-            held: None,
         }
     }
 
@@ -220,7 +203,6 @@ impl ImplicitEuler {
     /// next assembly; no allocation).
     pub fn set_system_form(&mut self, form: SystemForm) {
         self.form = form;
-        self.held = None;
     }
 
     /// The kernels of the edge-form system.
@@ -231,14 +213,11 @@ impl ImplicitEuler {
     /// Chooses the kernels of the edge-form system (no allocation).
     pub fn set_kernels(&mut self, kernels: Kernels) {
         self.kernels = kernels;
-        self.held = None;
     }
 
-    /// Forgets the warm start and any held Newton matrix (after a reset of
-    /// the state).
+    /// Forgets the warm start (after a reset of the state).
     pub fn reset(&mut self) {
         self.warm.fill(Vec3::zeros());
-        self.held = None;
     }
 
     /// Advances `sys` by `h` (s) under `forces` (Eq. 1, see the module docs).
@@ -300,19 +279,7 @@ impl ImplicitEuler {
                 tol: pcg.tol.max(0.5 * params.newton_tol * r_first / r_norm),
                 ..pcg
             };
-            let reuse = if it == 0 {
-                params.matrix_reuse_steps
-            } else {
-                0
-            };
-            let solve = self.newton_solve(
-                &sys,
-                (h, lambda, reuse),
-                it == 0,
-                &pcg_k,
-                forces,
-                &mut stats,
-            );
+            let solve = self.newton_solve(&sys, h, lambda, it == 0, &pcg_k, forces, &mut stats);
             stats.newton_iterations += 1;
             stats.cg_iterations += solve.iterations;
             stats.cg_residual = solve.residual;
@@ -325,9 +292,6 @@ impl ImplicitEuler {
             sys.v[i] = self.v0[i] + self.dv[i];
             sys.x[i] = self.x0[i] + h * (self.v0[i] + lambda * self.dv[i]);
         }
-        if let Some(held) = &mut self.held {
-            held.age = held.age.saturating_add(1);
-        }
         stats.finite = sys
             .x
             .iter()
@@ -337,7 +301,6 @@ impl ImplicitEuler {
             sys.x.copy_from_slice(&self.x0);
             sys.v.copy_from_slice(&self.v0);
             self.warm.fill(Vec3::zeros());
-            self.held = None;
         }
         stats
     }
@@ -382,9 +345,7 @@ impl ImplicitEuler {
         }
     }
 
-    /// Assembles `M − λ h B − λ² h² K` at the evaluation point and solves for δ;
-    /// with `reuse > 0` the held matrix is solved with instead if it was
-    /// assembled for the same `h` and λ fewer than `reuse` steps ago.
+    /// Assembles `M − λ h B − λ² h² K` at the evaluation point and solves for δ.
     ///
     /// If PCG meets a non-positive curvature (compressed springs' geometric
     /// stiffness can make the matrix indefinite), the solve is retried with
@@ -394,65 +355,13 @@ impl ImplicitEuler {
     fn newton_solve(
         &mut self,
         sys: &Dynamics<'_>,
-        (h, lambda, reuse): (f64, f64, u32),
+        h: f64,
+        lambda: f64,
         first: bool,
         pcg: &PcgParams,
         forces: &mut dyn ForceModel,
         stats: &mut StepStats,
     ) -> SolveStats {
-        let fresh = HeldMatrix { h, lambda, age: 0 };
-        stats.matrix_reused = self
-            .held
-            .is_some_and(|m| m.h == h && m.lambda == lambda && m.age < reuse);
-        if !stats.matrix_reused {
-            self.assemble(sys, h, lambda, forces, stats);
-            self.held = Some(fresh);
-        }
-        let clock = Instant::now();
-        if first {
-            self.delta.copy_from_slice(&self.warm);
-        } else {
-            self.delta.fill(Vec3::zeros());
-        }
-        let mut solve = self.solve_assembled(sys.fixed, pcg);
-        let mut shift = 0.0;
-        while solve.indefinite && shift < 64.0 {
-            stats.regularized += 1;
-            let next = if shift == 0.0 { 1.0 } else { 4.0 * shift };
-            for (d, m) in self.diag_scratch.iter_mut().zip(sys.mass) {
-                *d = m * (next - shift);
-            }
-            shift = next;
-            match self.form {
-                SystemForm::Edge => self.edge.add_to_diagonal(&self.diag_scratch),
-                SystemForm::BlockSparse => self.a.add_to_diagonal(&self.diag_scratch),
-            }
-            self.delta.fill(Vec3::zeros());
-            let retry = self.solve_assembled(sys.fixed, pcg);
-            solve = SolveStats {
-                iterations: solve.iterations + retry.iterations,
-                ..retry
-            };
-        }
-        if shift > 0.0 {
-            self.held = None; // its diagonal now carries the shift
-        }
-        if first {
-            self.warm.copy_from_slice(&self.delta);
-        }
-        stats.timings.pcg += seconds_since(clock);
-        solve
-    }
-
-    /// Assembles `M − λ h B − λ² h² K` at the evaluation point (in the current form).
-    fn assemble(
-        &mut self,
-        sys: &Dynamics<'_>,
-        h: f64,
-        lambda: f64,
-        forces: &mut dyn ForceModel,
-        stats: &mut StepStats,
-    ) {
         let (ck, cb) = (-lambda * lambda * h * h, -lambda * h);
         let clock = Instant::now();
         match self.form {
@@ -482,6 +391,37 @@ impl ImplicitEuler {
             }
         }
         stats.timings.assembly += seconds_since(clock);
+        let clock = Instant::now();
+        if first {
+            self.delta.copy_from_slice(&self.warm);
+        } else {
+            self.delta.fill(Vec3::zeros());
+        }
+        let mut solve = self.solve_assembled(sys.fixed, pcg);
+        let mut shift = 0.0;
+        while solve.indefinite && shift < 64.0 {
+            stats.regularized += 1;
+            let next = if shift == 0.0 { 1.0 } else { 4.0 * shift };
+            for (d, m) in self.diag_scratch.iter_mut().zip(sys.mass) {
+                *d = m * (next - shift);
+            }
+            shift = next;
+            match self.form {
+                SystemForm::Edge => self.edge.add_to_diagonal(&self.diag_scratch),
+                SystemForm::BlockSparse => self.a.add_to_diagonal(&self.diag_scratch),
+            }
+            self.delta.fill(Vec3::zeros());
+            let retry = self.solve_assembled(sys.fixed, pcg);
+            solve = SolveStats {
+                iterations: solve.iterations + retry.iterations,
+                ..retry
+            };
+        }
+        if first {
+            self.warm.copy_from_slice(&self.delta);
+        }
+        stats.timings.pcg += seconds_since(clock);
+        solve
     }
 
     /// Solves the assembled system (of the current form) for `delta`, right-hand side `r`.
@@ -551,7 +491,6 @@ impl ImplicitEuler {
             tol: params.stiffness_tol,
             ..params.pcg()
         };
-        self.held = None; // the Newton matrix is overwritten by `−K`
         match self.form {
             SystemForm::Edge => {
                 self.diag_scratch.fill(0.0);
@@ -612,7 +551,6 @@ impl ImplicitEuler {
     /// The edge-form matrix, mutable: for its index translation (the
     /// active window, [`crate::window`]); the next assembly overwrites its values.
     pub fn edge_matrix_mut(&mut self) -> &mut EdgeMatrix {
-        self.held = None;
         &mut self.edge
     }
 }

@@ -9,12 +9,10 @@
 //! forces of the two must agree to the bit (the queries only read the
 //! model), which the report checks.
 //!
-//! With `--matrix-reuse N` and/or `--direct-window R` the second tick is
-//! instead the force-only tick whose physics reuses the Newton matrix for
-//! up to `N` steps (`integrator.matrix_reuse_steps`) and/or integrates only
-//! the active window of radius `R` m (`integrator.window`): its forces then
-//! differ within Newton's tolerance or the window's error, and the report
-//! gives the largest gap.
+//! With `--direct-window R` the second tick is instead the force-only tick
+//! whose physics integrates only the active window of radius `R` m (what
+//! `run --mode direct` runs, `coupling.direct_window`): its forces then
+//! differ by the window's error, and the report gives the largest gap.
 
 use super::clock::{percentile, thread_cpu_us};
 use echothigh_model::StepTimings;
@@ -96,15 +94,10 @@ pub struct DirectCompare {
     /// The real-time tick: physics and force only.
     pub force_only: TickCpu,
     /// The other tick: with the haptic queries (the previous real-time
-    /// tick), or force-only reusing the Newton matrix (`matrix_reuse_steps`
-    /// > 0).
+    /// tick), or force-only on the active window (`window_radius_m` > 0).
     pub with_queries: TickCpu,
-    /// `integrator.matrix_reuse_steps` of the other tick.
-    pub matrix_reuse_steps: u32,
     /// The other tick's active window radius (m; 0: none).
     pub window_radius_m: f64,
-    /// Steps of the other tick that reused a matrix.
-    pub reused_steps: usize,
     /// Newton iterations of the other tick's steps, summed.
     pub other_newton_iterations: u64,
     /// Newton iterations of the force-only tick's steps, summed.
@@ -121,19 +114,17 @@ pub struct DirectCompare {
     pub contact_stage_medians_us: Vec<(String, f64)>,
 }
 
-/// The other tick's physics: with neither option it runs the queries.
+/// The other tick's physics: without a window it runs the queries.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct OtherTick {
-    /// `integrator.matrix_reuse_steps`.
-    pub matrix_reuse_steps: u32,
-    /// Active window radius (m; 0: no window).
+    /// Active window radius (m; 0: no window, the queries instead).
     pub window_radius_m: f64,
 }
 
 impl OtherTick {
     /// True if the other tick is the tick with the queries.
     pub fn queries(&self) -> bool {
-        self.matrix_reuse_steps == 0 && self.window_radius_m == 0.0
+        self.window_radius_m == 0.0
     }
 }
 
@@ -153,7 +144,6 @@ pub fn compare_direct(ticks: usize, o: OtherTick) -> anyhow::Result<DirectCompar
         let queries = other && o.queries();
         let mut side = s.clone();
         if other {
-            side.integrator.matrix_reuse_steps = o.matrix_reuse_steps;
             if o.window_radius_m > 0.0 {
                 side.coupling.direct_window = true;
                 side.integrator.window.radius = o.window_radius_m;
@@ -177,7 +167,6 @@ pub fn compare_direct(ticks: usize, o: OtherTick) -> anyhow::Result<DirectCompar
     let mut last = LastStep::default();
     let mut long_ticks = Vec::new();
     let mut contact_stages: Vec<[f64; 10]> = Vec::with_capacity(ticks);
-    let mut reused_steps = 0;
     for i in 0..ticks {
         let now = i as f64 * period;
         let order = if i % 2 == 0 { [0, 1] } else { [1, 0] };
@@ -188,9 +177,6 @@ pub fn compare_direct(ticks: usize, o: OtherTick) -> anyhow::Result<DirectCompar
             let us = thread_cpu_us() - c0;
             let step = last.0.take().unwrap_or_default();
             cpu[k].push((us, step.newton_iterations));
-            // A step that solved but assembled nothing reused a matrix.
-            let reused = step.newton_iterations > 0 && step.stages.assembly == 0.0;
-            reused_steps += usize::from(k == 1 && reused);
             if k == 0 && step.stages.contact > 0.0 {
                 let mut row = [0.0; 10];
                 row[..9].copy_from_slice(&step.stages.values().map(|v| v * 1e6));
@@ -223,9 +209,7 @@ pub fn compare_direct(ticks: usize, o: OtherTick) -> anyhow::Result<DirectCompar
         median_ratio: with_queries.median_us / force_only.median_us.max(1e-9),
         force_only,
         with_queries,
-        matrix_reuse_steps: o.matrix_reuse_steps,
         window_radius_m: o.window_radius_m,
-        reused_steps,
         other_newton_iterations,
         force_only_newton_iterations,
         max_force_gap_n: gap,

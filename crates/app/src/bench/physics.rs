@@ -68,13 +68,9 @@ pub struct Args {
     /// queries, interleaved; 0: not run).
     #[arg(long, default_value_t = 0)]
     direct_ticks: usize,
-    /// With `--direct-ticks`: the second tick is the force-only tick with
-    /// `integrator.matrix_reuse_steps` = this (modified Newton) instead of
-    /// the tick with the queries (0: the queries).
-    #[arg(long, default_value_t = 0)]
-    matrix_reuse: u32,
     /// With `--direct-ticks`: the second tick is the force-only tick
-    /// integrating only the active window of this radius (m; 0: none).
+    /// integrating only the active window of this radius (m), as `run
+    /// --mode direct` does, instead of the tick with the queries (0).
     #[arg(long, default_value_t = 0.0)]
     direct_window: f64,
     /// Rounds of the active window's A/B (10k press with and without the
@@ -247,15 +243,13 @@ fn run_compare(args: &Args) -> anyhow::Result<()> {
 
 fn run_direct(args: &Args) -> anyhow::Result<()> {
     let o = super::direct_compare::OtherTick {
-        matrix_reuse_steps: args.matrix_reuse,
         window_radius_m: args.direct_window,
     };
     let r = super::direct_compare::compare_direct(args.direct_ticks, o)?;
-    let other = match (o.matrix_reuse_steps, o.window_radius_m > 0.0) {
-        (0, false) => "with queries".to_string(),
-        (n, false) => format!("reuse ≤ {n}"),
-        (0, true) => format!("window {} mm", o.window_radius_m * 1e3),
-        (n, true) => format!("window+reuse {n}"),
+    let other = if o.queries() {
+        "with queries".to_string()
+    } else {
+        format!("window {} mm", o.window_radius_m * 1e3)
     };
     for (name, c) in [
         ("force only", &r.force_only),
@@ -267,12 +261,11 @@ fn run_direct(args: &Args) -> anyhow::Result<()> {
         );
     }
     eprintln!(
-        "median ratio ({other} / force only) {:.2}; largest force gap {:.1e} N; Newton iterations {} / {}, {} steps reused a matrix",
+        "median ratio ({other} / force only) {:.2}; largest force gap {:.1e} N; Newton iterations {} / {}",
         r.median_ratio,
         r.max_force_gap_n,
         r.other_newton_iterations,
-        r.force_only_newton_iterations,
-        r.reused_steps
+        r.force_only_newton_iterations
     );
     let stages: Vec<String> = r
         .contact_stage_medians_us

@@ -74,19 +74,6 @@ pub struct IntegratorParams {
     /// matrix stays SPD and Newton, on the exact residual, converges
     /// linearly instead of quadratically. Default false.
     pub geometric_stiffness_in_compression: bool,
-    /// Modified Newton across steps (issue 18): the first Newton iteration
-    /// of a step may solve with the Newton matrix assembled by an earlier
-    /// step, at most this many steps old (0: every step assembles its own,
-    /// the default). Newton still converges on the exact residual to
-    /// [`Self::newton_tol`], so a step's result stays within the same
-    /// tolerance; any later iteration of the step reassembles at its own
-    /// point, and a changed `h` or λ, a regularized solve, a stiffness
-    /// query (which overwrites the matrix) or a reset forces an assembly.
-    /// It pays where consecutive matrices barely differ: at the haptic rate
-    /// (`direct` coupling, h = 1 ms) `λ² h² K` is 1e-4 of its 100 Hz size
-    /// against `M`. CVODE's default bound on the Jacobian's age is 20 steps
-    /// (`msbp`, Hindmarsh et al., ACM TOMS 31, 2005). In [0, 1000].
-    pub matrix_reuse_steps: u32,
     /// The active window (issue 18): integrate only the nodes near the
     /// probe. Off by default.
     pub window: WindowParams,
@@ -106,7 +93,6 @@ impl Default for IntegratorParams {
             preconditioner: Preconditioner::BlockJacobi,
             asymptote_margin: 0.05,
             geometric_stiffness_in_compression: false,
-            matrix_reuse_steps: 0,
             window: WindowParams::default(),
         }
     }
@@ -160,9 +146,6 @@ impl IntegratorParams {
         )?;
         let cg = u64::from(self.cg_max_iterations);
         count_range(prefix, "cg_max_iterations", cg, (1, 5000), work)?;
-        let reuse = u64::from(self.matrix_reuse_steps);
-        let age = "steps a Newton matrix may be reused (0 = never)";
-        count_range(prefix, "matrix_reuse_steps", reuse, (0, 1000), age)?;
         let margin = "a fraction of the springs' asymptote";
         range(
             prefix,
