@@ -112,6 +112,19 @@ impl ColumnLimits {
     }
 }
 
+/// `(n_x a_x + n_y a_y) + n_z a_z` per lane, unfused (nalgebra's order).
+/// A function, not a closure, so that it inlines into the kernel's
+/// AVX2 context (a closure is compiled without the target features).
+#[inline(always)]
+fn dot<S: SimdSqrt>(
+    s: S,
+    n: (S::f64s, S::f64s, S::f64s),
+    a: (S::f64s, S::f64s, S::f64s),
+) -> S::f64s {
+    let xy = s.add_f64s(s.mul_f64s(n.0, a.0), s.mul_f64s(n.1, a.1));
+    s.add_f64s(xy, s.mul_f64s(n.2, a.2))
+}
+
 /// The lane kernel of [`ColumnLimits::max_step_fraction`].
 struct StepFraction<'a> {
     l: &'a ColumnLimits,
@@ -132,17 +145,14 @@ impl SqrtKernel for StepFraction<'_> {
         let (nz, _) = S::as_simd_f64s(&nz[..full]);
         let (hm, _) = S::as_simd_f64s(&self.l.h_min[..full]);
         let (zero, one) = (s.splat_f64s(0.0), s.splat_f64s(1.0));
-        let dot = |a: S::f64s, b: S::f64s, c: S::f64s, k: usize| {
-            let xy = s.add_f64s(s.mul_f64s(nx[k], a), s.mul_f64s(ny[k], b));
-            s.add_f64s(xy, s.mul_f64s(nz[k], c))
-        };
         let mut acc = one;
         let nodes = self.x.chunks_exact(lanes).zip(self.dx.chunks_exact(lanes));
         for (k, (x, dx)) in nodes.enumerate() {
             let (x0, x1, x2) = s.load_xyz(x);
             let (d0, d1, d2) = s.load_xyz(dx);
-            let rate = dot(d0, d1, d2, k);
-            let room = s.sub_f64s(dot(x0, x1, x2, k), hm[k]);
+            let n = (nx[k], ny[k], nz[k]);
+            let rate = dot(s, n, (d0, d1, d2));
+            let room = s.sub_f64s(dot(s, n, (x0, x1, x2)), hm[k]);
             // min(ρ/−r, 1): `minpd` returns its second operand if the first
             // is NaN, as f64::min does.
             let ratio = s.min_f64s(s.div_f64s(room, s.neg_f64s(rate)), one);
