@@ -5,12 +5,14 @@
 //! thread-CPU time per step, CG iterations per step and stage medians.
 //!
 //! `cargo run --release -p echothigh-model --example precond_ab -- \
-//!   <n_theta> <n_z> <steps> <rounds> <B: coarse patch | "scalar-kernels" | "scalar-limit">`
+//!   <n_theta> <n_z> <steps> <rounds> <scalar-kernels | scalar-limit>`
 //!
-//! A is the default model; B sets `coarse_patch` (the two-level trial), or
-//! runs the scalar kernels (`scalar-kernels`: its `step_fraction` stage
-//! differs from A's only by the limiter's kernel); `scalar-limit` times
-//! the limiter alone on the press states, both kernels alternated.
+//! `scalar-kernels`: A is the default model, B runs the scalar kernels
+//! (its `step_fraction` stage differs from A's only by the limiter's
+//! kernel: the stage's other work, the path vectors, is the same code).
+//! `scalar-limit` times the limiter alone on the press states, both
+//! kernels alternated. (The two-level preconditioner trial of issue 18
+//! was measured with this example at commit 96e66b5, B = `coarse_patch`.)
 
 use echothigh_model::{ColumnLimits, Kernels, ModelConfig, NoExtraForce, ThighModel, Vec3};
 use std::time::Instant;
@@ -38,11 +40,10 @@ struct Run {
     stiff_iters: u32,
 }
 
-fn model(nt: usize, nz: usize, coarse: u32) -> ThighModel {
+fn model(nt: usize, nz: usize) -> ThighModel {
     let mut c = ModelConfig::default();
     c.thigh.n_theta = nt;
     c.thigh.n_z = nz;
-    c.integrator.coarse_patch = coarse;
     ThighModel::new(&c).expect("model")
 }
 
@@ -108,7 +109,7 @@ fn press(m: &mut ThighModel, steps: usize, warmup: usize) -> Run {
 /// `x → x + h v` timed on both kernels, alternated (thread-CPU over 50
 /// calls each, µs per call).
 fn limiter_ab(nt: usize, nz: usize, steps: usize) -> (f64, f64) {
-    let mut m = model(nt, nz, 0);
+    let mut m = model(nt, nz);
     let limits = ColumnLimits::new((0..m.node_count()).map(|k| {
         (
             m.mesh().rest_normals()[k],
@@ -154,20 +155,16 @@ fn main() {
         }
         return;
     }
-    // B: the scalar kernels (every stage's scalar code: the step-fraction
-    // stage then differs from A only by the limiter's kernel), or a patch.
-    let scalar_b = args[5] == "scalar-kernels";
-    let coarse: u32 = if scalar_b {
-        0
-    } else {
-        args[5].parse().unwrap()
-    };
+    assert_eq!(
+        args[5], "scalar-kernels",
+        "B: scalar-kernels or scalar-limit"
+    );
     let t0 = Instant::now();
     let mut ab: [Vec<Run>; 2] = [vec![], vec![]];
     for r in 0..rounds {
-        for (side, c) in [(0usize, 0u32), (1, coarse)] {
-            let mut m = model(nt, nz, c);
-            if side == 1 && scalar_b {
+        for side in [0, 1] {
+            let mut m = model(nt, nz);
+            if side == 1 {
                 m.set_kernels(Kernels::Scalar);
             }
             let run = press(&mut m, steps, 3);
@@ -186,7 +183,7 @@ fn main() {
     };
     let (a, b) = (med(0, |r| r.cpu_us), med(1, |r| r.cpu_us));
     println!(
-        "{} nodes, patch {coarse}: medians over {rounds} rounds: A {a:.1} µs/step ({:.2} CG), B {b:.1} µs/step ({:.2} CG); B/A {:.3}; pcg A {:.1} B {:.1} µs; step_fraction A {:.1} B {:.1} µs; stiffness solve A {:.1} B {:.1} µs; {:.0} s",
+        "{} nodes: medians over {rounds} rounds: A {a:.1} µs/step ({:.2} CG), B {b:.1} µs/step ({:.2} CG); B/A {:.3}; pcg A {:.1} B {:.1} µs; step_fraction A {:.1} B {:.1} µs; stiffness solve A {:.1} B {:.1} µs; {:.0} s",
         nt * nz,
         med(0, |r| r.cg_per_step),
         med(1, |r| r.cg_per_step),

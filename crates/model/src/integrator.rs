@@ -194,12 +194,6 @@ impl ImplicitEuler {
         }
     }
 
-    /// Sets the two-level coarse level of the SIMD solver (see
-    /// [`SimdPcg::set_coarse`]; `None`: block-Jacobi alone).
-    pub fn set_coarse(&mut self, coarse: Option<crate::coarse::TwoLevel>) {
-        self.simd_pcg.set_coarse(coarse);
-    }
-
     /// The matrix form of the Newton systems.
     pub fn system_form(&self) -> SystemForm {
         self.form

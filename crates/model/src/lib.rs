@@ -20,7 +20,6 @@
 
 pub mod block_sparse;
 pub mod checkpoint;
-pub mod coarse;
 pub mod config;
 pub mod edge_matrix;
 pub mod edge_pcg;
@@ -48,7 +47,6 @@ pub type Vec3 = nalgebra::Vector3<f64>;
 
 pub use block_sparse::{BlockSparse, PatternError};
 pub use checkpoint::{DivergedError, MAX_POSITION, MAX_SPEED};
-pub use coarse::TwoLevel;
 pub use config::{
     ConfigError, IntegratorParams, ModelConfig, ThighGeometry, TissueParams, WindowParams,
 };

@@ -8,11 +8,8 @@
 //! 2. nodes: `q = A p` pulled through the stencil, with `pᵀ A p`
 //!    ([`stencil_product`]), then the leftover springs, rank-one and side
 //!    terms one by one ([`add_edge_product`], [`EdgeMatrix::add_coupling_product`]);
-//! 3. nodes: `x += α p`, `r −= α q`, `z = P⁻¹ r`, `rᵀ r`, `rᵀ z` ([`update`]);
-//! 4. with the two-level trial ([`Self::set_coarse`]), `z += P A_c⁻¹ Pᵀ r`
-//!    and its share of `rᵀ z` ([`TwoLevel::apply`]), if not converged.
+//! 3. nodes: `x += α p`, `r −= α q`, `z = P⁻¹ r`, `rᵀ r`, `rᵀ z` ([`update`]).
 
-use crate::coarse::TwoLevel;
 use crate::edge_matrix::EdgeMatrix;
 use crate::node_vectors::add_edge_product;
 use crate::pcg::{PcgParams, Preconditioner, SolveStats};
@@ -36,10 +33,6 @@ pub struct SimdPcg {
     /// True while `q = A x` for the last solve's `x` (no iteration ran):
     /// [`Self::solution_product`] then copies `q` instead of a product.
     q_is_ax: bool,
-    /// The coarse level added to block-Jacobi, if set.
-    coarse: Option<TwoLevel>,
-    /// The coarse level factored for the current solve's matrix.
-    coarse_ready: bool,
 }
 
 impl SimdPcg {
@@ -58,34 +51,6 @@ impl SimdPcg {
             inv: std::array::from_fn(|_| z.clone()),
             free: z,
             q_is_ax: false,
-            coarse: None,
-            coarse_ready: false,
-        }
-    }
-
-    /// Adds the two-level coarse correction to the block-Jacobi
-    /// preconditioner (`None`: block-Jacobi alone, the default). A coarse
-    /// matrix that fails to factor leaves that solve on block-Jacobi.
-    ///
-    /// # Panics
-    /// If `coarse` is for another number of nodes.
-    pub fn set_coarse(&mut self, coarse: Option<TwoLevel>) {
-        if let Some(c) = &coarse {
-            assert_eq!(c.fine_nodes(), self.n());
-        }
-        self.coarse = coarse;
-    }
-
-    /// The coarse level, if set.
-    pub fn coarse(&self) -> Option<&TwoLevel> {
-        self.coarse.as_ref()
-    }
-
-    /// `z += P A_c⁻¹ Pᵀ r` if the coarse level is ready; its share of `rᵀ z`.
-    fn coarse_correction(&mut self) -> f64 {
-        match self.coarse.as_mut().filter(|_| self.coarse_ready) {
-            Some(c) => c.apply(&self.r, &mut self.z, &self.free, self.m.layout().pad()),
-            None => 0.0,
         }
     }
 
@@ -206,11 +171,6 @@ impl SimdPcg {
         let mut r_norm = rr.sqrt();
         let mut stats = SolveStats::default();
         if r_norm > target {
-            self.coarse_ready = match self.coarse.as_mut().filter(|_| jacobi) {
-                Some(c) => c.factor(a, fixed).is_ok(),
-                None => false,
-            };
-            let rz = rz + self.coarse_correction();
             self.iterate(a, params, target, rz, &mut r_norm, &mut stats);
         } else {
             stats.converged = true;
@@ -263,7 +223,6 @@ impl SimdPcg {
                 stats.converged = true;
                 break;
             }
-            let rz_new = rz_new + self.coarse_correction();
             beta = rz_new / rz;
             rz = rz_new;
         }

@@ -3,7 +3,6 @@
 //! named stages.
 
 use crate::block_sparse::BlockSparse;
-use crate::coarse::TwoLevel;
 use crate::config::{ConfigError, ModelConfig};
 use crate::force_model::{ForceModel, SumForce};
 use crate::integrator::{filter, Dynamics, ImplicitEuler, Kernels, StepStats, SystemForm};
@@ -79,16 +78,10 @@ impl ThighModel {
         } else {
             None
         };
-        let mut integrator = ImplicitEuler::new(&pattern);
-        if ip.coarse_patch >= 2 && window.is_none() {
-            let patch = ip.coarse_patch as usize;
-            let coarse = TwoLevel::new(mesh.n_theta(), mesh.n_z(), patch, &pattern);
-            integrator.set_coarse(Some(coarse));
-        }
         Ok(ThighModel {
             window,
             config: config.clone(),
-            integrator,
+            integrator: ImplicitEuler::new(&pattern),
             x: mesh.rest_positions().to_vec(),
             v: vec![Vec3::zeros(); n],
             external: vec![Vec3::zeros(); n],

@@ -61,14 +61,6 @@ pub struct IntegratorParams {
     pub cg_max_iterations: u32,
     /// PCG preconditioner. Default `block_jacobi`.
     pub preconditioner: Preconditioner,
-    /// The two-level trial (issue 18, [`crate::coarse`]): with
-    /// `block_jacobi`, the SIMD kernels and no active window, add a coarse
-    /// correction on aggregates of about `coarse_patch × coarse_patch` grid
-    /// nodes; 0 = off. In {0} ∪ [2, 64]: one line per patch is no coarser
-    /// than the grid, and above 64 a patch spans most of the default mesh.
-    /// Default 0 (off: it did not lower the step's time, see the README's
-    /// performance section).
-    pub coarse_patch: u32,
     /// Asymptote margin `m ∈ (0, 1)`: Newton steps are limited so every normal
     /// spring's compression stays ≤ `(1 − m) · b/a`. In [0.001, 0.5]: below,
     /// a spring may sit within round-off of its pole; above, half the
@@ -99,7 +91,6 @@ impl Default for IntegratorParams {
             stiffness_tol: 1e-5,
             cg_max_iterations: 200,
             preconditioner: Preconditioner::BlockJacobi,
-            coarse_patch: 0,
             asymptote_margin: 0.05,
             geometric_stiffness_in_compression: false,
             window: WindowParams::default(),
@@ -155,11 +146,6 @@ impl IntegratorParams {
         )?;
         let cg = u64::from(self.cg_max_iterations);
         count_range(prefix, "cg_max_iterations", cg, (1, 5000), work)?;
-        if self.coarse_patch != 0 {
-            let patch = u64::from(self.coarse_patch);
-            let why = "grid lines per coarse patch, 0 = off";
-            count_range(prefix, "coarse_patch", patch, (2, 64), why)?;
-        }
         let margin = "a fraction of the springs' asymptote";
         range(
             prefix,

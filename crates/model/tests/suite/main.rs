@@ -6,7 +6,6 @@
 //! process-wide state stay binaries of their own in `tests/`. A file added
 //! here must be declared below: `suite_lists_every_file` checks it.
 
-mod coarse;
 #[path = "../common/mod.rs"]
 mod common;
 mod concentrated_load;
