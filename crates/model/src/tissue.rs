@@ -30,6 +30,7 @@ use crate::springs::{
     spring_force_jacobian,
 };
 use crate::stencil::StencilLayout;
+use crate::step_limit::ColumnLimits;
 use crate::tissue_simd::{NormalSpec, SpringSpec, TissueStencil};
 use crate::Vec3;
 use nalgebra::Matrix3;
@@ -182,8 +183,9 @@ pub struct TissueForces {
     normals: Vec<NormalSpring>,
     /// `(n₀, h_min)` of node `k`'s column: a Newton iterate must keep
     /// `n₀·x ≥ h_min` (m), i.e. the column longer than
-    /// `rest − (1 − margin) b/a`. The 32 bytes the step limiter reads.
-    limits: Vec<(Vec3, f64)>,
+    /// `rest − (1 − margin) b/a`. The 32 bytes the step limiter reads,
+    /// as structure of arrays.
+    limits: ColumnLimits,
     geometric_in_compression: bool,
     /// The springs on the grid stencil, for [`Kernels::Simd`].
     stencil: TissueStencil,
@@ -228,6 +230,7 @@ impl TissueForces {
         let (normals, limits): (Vec<NormalSpring>, Vec<(Vec3, f64)>) = (0..mesh.node_count())
             .map(|k| normal_spring(mesh, params, k, margin, pattern.diagonal_index(k)))
             .unzip();
+        let limits = ColumnLimits::new(limits);
         let specs: Vec<SpringSpec> = springs
             .iter()
             .map(|s| (s.i, s.j, s.rest, s.a, s.c))
@@ -261,8 +264,10 @@ impl TissueForces {
             debug_assert!(s.i == e.i && s.j == e.j);
             (s.rest, s.a, s.c) = linear_constants(mesh, params, e);
         }
-        for (k, (s, l)) in self.normals.iter_mut().zip(&mut self.limits).enumerate() {
-            (*s, *l) = normal_spring(mesh, params, k, margin, s.diag);
+        for (k, s) in self.normals.iter_mut().enumerate() {
+            let limit;
+            (*s, limit) = normal_spring(mesh, params, k, margin, s.diag);
+            self.limits.set(k, limit);
         }
         self.stencil.reload(
             self.springs.iter().map(|s| (s.rest, s.a, s.c)),
@@ -414,21 +419,6 @@ fn add_spring_term(
     debug_assert!(written.is_ok());
 }
 
-/// Largest `α ∈ [0, 1]` with `n·(x + s dx) ≥ h_min` for all `s ∈ [0, α]`
-/// (the column's height stays above its limit; linear in `s`).
-#[inline]
-fn path_fraction(n: &Vec3, h_min: f64, x: &Vec3, dx: &Vec3) -> f64 {
-    let rate = n.dot(dx);
-    if rate >= 0.0 {
-        return 1.0; // moving away from the anchor: the column lengthens
-    }
-    let room = n.dot(x) - h_min;
-    if room <= 0.0 {
-        return 0.0; // at the limit and moving inward
-    }
-    (room / -rate).min(1.0)
-}
-
 impl ForceModel for TissueForces {
     fn add_forces(&mut self, x: &[Vec3], v: &[Vec3], f: &mut [Vec3]) {
         if self.kernels == Kernels::Simd {
@@ -549,13 +539,10 @@ impl ForceModel for TissueForces {
     }
 
     /// Keeps every normal column longer than `rest − (1 − margin) b/a` along
-    /// the straight path from `x` to `x + dx`.
+    /// the straight path from `x` to `x + dx` ([`ColumnLimits`], on this
+    /// model's kernels).
     fn max_step_fraction(&self, x: &[Vec3], dx: &[Vec3]) -> f64 {
-        self.limits
-            .iter()
-            .zip(x.iter().zip(dx))
-            .map(|((n, h_min), (x, dx))| path_fraction(n, *h_min, x, dx))
-            .fold(1.0, f64::min)
+        self.limits.max_step_fraction(x, dx, self.kernels)
     }
 
     /// [`TissueForces::add_stiffness_product`] (the springs' blocks as the
@@ -579,31 +566,5 @@ impl ForceModel for TissueForces {
             add_spring_product(&self.springs[e], x, (alpha, geo), w, out);
         }
         true
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::path_fraction;
-    use crate::Vec3;
-
-    #[test]
-    fn path_fraction_stops_on_the_limit_plane() {
-        // Column axis +y, limit at height 0.01 m, from 0.04 m straight down
-        // by 0.04 m: the limit is reached at s = 0.75.
-        let n = Vec3::new(0.0, 1.0, 0.0);
-        let x = Vec3::new(0.3, 0.04, 0.0);
-        let d = Vec3::new(0.0, -0.04, 0.0);
-        assert!((path_fraction(&n, 0.01, &x, &d) - 0.75).abs() < 1e-12);
-        assert_eq!(path_fraction(&n, 0.01, &x, &(d * 0.5)), 1.0);
-        assert_eq!(path_fraction(&n, 0.01, &x, &(-d)), 1.0);
-        // A sideways move does not shorten the column, however long.
-        let side = Vec3::new(1.0, 0.0, 0.0);
-        assert_eq!(path_fraction(&n, 0.01, &x, &side), 1.0);
-        // Oblique: only the axial part counts (0.03 m of room, 0.06 m down).
-        let oblique = Vec3::new(5.0, -0.06, 0.0);
-        assert!((path_fraction(&n, 0.01, &x, &oblique) - 0.5).abs() < 1e-12);
-        // At the limit, moving in: no step at all.
-        assert_eq!(path_fraction(&n, 0.04, &x, &d), 0.0);
     }
 }
