@@ -21,6 +21,7 @@ mod speckle_psf;
 mod specular;
 mod target_band;
 mod texture;
+mod thrombus_shape;
 mod tracking;
 mod vein_condition;
 mod vessel_shape;
