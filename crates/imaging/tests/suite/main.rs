@@ -14,6 +14,7 @@ mod common;
 mod config;
 mod contrast;
 mod cyst;
+mod femur_depth;
 mod lumen;
 mod pan;
 mod section_structures;
