@@ -174,7 +174,7 @@ pub fn stacked(v: &Vessel, neighbour: &Vessel) -> Option<bool> {
 }
 
 /// Half of the vertical extent (m) of `v` with its wall.
-fn outer_half_height(v: &Vessel) -> f64 {
+pub(crate) fn outer_half_height(v: &Vessel) -> f64 {
     let (sn, cs) = v.angle.sin_cos();
     let (a, b) = (v.radius + v.wall, v.radius_b + v.wall);
     (a * a * sn * sn + b * b * cs * cs).sqrt()

@@ -27,6 +27,26 @@
 //! moved the upper wall by `2k` over `1.5 b`, stretched by up to 2.3, 3.7
 //! dB, and the upper wall with it).
 //!
+//! A lumen that expands in tissue coordinates (`c > 1`: a thrombosed vein
+//! that keeps its height while the column around it is compressed,
+//! [`compensated_ratio`], a systole, a distension) pushes its lower wall
+//! down by `(c − 1) h`. Near the femur the tissue below cannot take all
+//! of it: the decay below must end at the femur's top with slope ≥ 1/3,
+//! so the lower wall may move down by at most `g/1.5` (`g` the gap from
+//! the vessel's outer bottom to the femur's top); and an expanded lumen that crossed the femur's depth `B` would leave the
+//! column map's linear part (`y = d + s (1 − d/B)` above `B`, the identity
+//! below): its part below `B` escapes the column's compression and is
+//! drawn `1/(1 − s/B)` times taller than the rest, a point at the bottom
+//! (the pear-shaped thrombosed vein of issue 21 at 10–15 N). So the whole
+//! lumen is lifted, `η ↦ δ + c η` with the walls moved by `k + δ` (above)
+//! and `−k + δ` (below), by the one displacement of the vessel
+//! `δ = min(0, g/1.5 − (c − 1) b)` (`b` the lumen's half-height, the
+//! tallest chord's): an
+//! incompressible lumen is displaced towards the probe as a whole and its
+//! surroundings compress ([`VesselWarp::with_floor`]). Every column takes
+//! the same `δ` and scales its chord by the same `c` about it, so the
+//! lumen stays the rest ellipse scaled by `c` in height: convex.
+//!
 //! The warp is vertical only (the scatterers are binned by column). The
 //! lumen's widening as it flattens (a wall that keeps its length,
 //! [`crate::widen`]) is drawn after the splat by a lateral map of the
@@ -70,6 +90,14 @@ pub struct VesselWarp {
     above: Carry,
     /// A neighbour carried through the decay below.
     below: Carry,
+    /// The whole lumen's displacement `δ` (m, positive downwards; ≤ 0:
+    /// an expanding lumen lifted off the femur, [`VesselWarp::with_floor`]).
+    lift: f64,
+    /// The vessel's lumen half-height `b` (m, its tallest chord's).
+    vessel_half_height: f64,
+    /// The vessel's outer bottom at rest (m: its centre depth plus its
+    /// wall-grown half-height).
+    vessel_bottom: f64,
 }
 
 impl VesselWarp {
@@ -84,26 +112,40 @@ impl VesselWarp {
         let shift = (1.0 - ratio) * h;
         let least = 1.5 * (-shift).max(0.0);
         let b = vessel.half_height();
-        let above = (2.0 * b)
-            .min(0.8 * (centre - h - wall))
-            .max(least)
-            .max(1e-4);
         let below = (2.0 * b).max(least);
-        VesselWarp {
+        let mut w = VesselWarp {
             centre,
             half_height: h,
             ratio,
             shift,
-            decay: above,
+            decay: 0.0,
             decay_below: below,
             wall,
-            lo: centre - h - wall - above,
+            lo: 0.0,
             hi: centre + h + wall + below,
             band: 0.0,
             band_shift: 0.0,
             above: Carry::default(),
             below: Carry::default(),
-        }
+            lift: 0.0,
+            vessel_half_height: b,
+            vessel_bottom: vessel.depth + crate::carry::outer_half_height(vessel),
+        };
+        w.set_decay_above();
+        w
+    }
+
+    /// The decay above, `L = 2 b` at most 0.8 of the depth of the outer
+    /// top (so the skin stays), at least `1.5 |k + δ|` for an upper wall
+    /// moving up (slope `1 + (k + δ)/L ≥ 1/3`), and where it starts.
+    fn set_decay_above(&mut self) {
+        let top = self.centre - self.half_height - self.wall;
+        let least = 1.5 * (-(self.shift + self.lift)).max(0.0);
+        self.decay = (2.0 * self.vessel_half_height)
+            .min(0.8 * top)
+            .max(least)
+            .max(1e-4);
+        self.lo = top - self.decay;
     }
 
     /// The unheld displacement (m) of the decay above (`above`) or below
@@ -111,9 +153,9 @@ impl VesselWarp {
     #[inline]
     fn decay_at(&self, above: bool, x: f64) -> f64 {
         if above {
-            self.shift * (1.0 - x / self.decay).max(0.0)
+            (self.shift + self.lift) * (1.0 - x / self.decay).max(0.0)
         } else {
-            -self.shift * (1.0 - x / self.decay_below).max(0.0)
+            (self.lift - self.shift) * (1.0 - x / self.decay_below).max(0.0)
         }
     }
 
@@ -156,13 +198,26 @@ impl VesselWarp {
     }
 
     /// This warp with the tissue below the vessel held from depth `floor`
-    /// (m) down (the femur's top: bone does not follow a vein's collapse).
-    /// The lower decay ends at `floor` (a collapsing lumen, `k > 0`, keeps
-    /// the slope `1 + k/L_b > 1` for any `L_b`), but stays at least
-    /// `1.5 |k|` for an expanding one (slope ≥ 1/3) and at least 0.1 mm.
+    /// (m) down (the femur's top: bone does not follow a vein's collapse,
+    /// nor is it pushed by a lumen that expands). The lower decay ends at
+    /// `floor`: a collapsing lumen (`k > 0`) keeps the slope `1 + k/L_b >
+    /// 1` for any `L_b`; an expanding one (`c > 1`) is first lifted whole
+    /// by `δ = min(0, g/1.5 − (c − 1) b)` (`g = floor −` the vessel's
+    /// outer bottom; see the module's doc), which leaves its lower wall
+    /// moving down by `K_b = (c − 1) h + δ ≤ g/1.5` in every column, so a
+    /// decay of `1.5 K_b ≤ g` (slope ≥ 1/3) fits above the floor. The
+    /// decay stays at least 0.1 mm (and `1.5 K_b` where the vessel
+    /// already touches the floor, `g = 0`).
     pub fn with_floor(mut self, floor: f64) -> Self {
+        if self.ratio > 1.0 {
+            let gap = (floor - self.vessel_bottom).max(0.0);
+            let push = (self.ratio - 1.0) * self.vessel_half_height;
+            self.lift = (gap / 1.5 - push).min(0.0);
+            self.set_decay_above();
+        }
         let outer = self.centre + self.half_height + self.wall;
-        let room = (floor - outer).max(1.5 * (-self.shift).max(0.0)).max(1e-4);
+        let down = (self.lift - self.shift).max(0.0);
+        let room = (floor - outer).max(1.5 * down).max(1e-4);
         self.decay_below = self.decay_below.min(room);
         self.hi = outer + self.decay_below;
         self
@@ -202,7 +257,8 @@ impl VesselWarp {
     /// Whether the warp moves anything in this column.
     #[inline]
     pub fn is_active(&self) -> bool {
-        (self.half_height > 0.0 && (self.shift != 0.0 || self.band_shift != 0.0))
+        (self.half_height > 0.0
+            && (self.shift != 0.0 || self.band_shift != 0.0 || self.lift != 0.0))
             || self.above.is_active()
             || self.below.is_active()
     }
@@ -229,7 +285,7 @@ impl VesselWarp {
         if self.band_shift != 0.0 {
             eta = self.tail_map(eta);
         }
-        self.centre + self.ratio * eta
+        self.centre + self.lift + self.ratio * eta
     }
 }
 
@@ -319,6 +375,38 @@ mod tests {
                     y >= last - 1e-15,
                     "floored map not monotone for c = {ratio}"
                 );
+                last = y;
+            }
+        }
+    }
+
+    /// An expanding lumen 2 mm above the floor (a thrombosed vein keeping
+    /// its height in a column compressed to 0.47, `c` = 1.72) is lifted
+    /// whole: every column's chord maps to `δ + c η` about the axis with
+    /// the same `δ = g/1.5 − (c − 1) b` (here −2.5 mm; to 1e-15 m, the
+    /// rounding of 3e-2 m depths), the floor and the bone below it stay
+    /// where they are, and the map stays increasing (slope ≥ 1/3, less
+    /// 1e-9 of rounding over 1 µm steps).
+    #[test]
+    fn an_expanding_lumen_near_the_floor_is_lifted_whole() {
+        let v = vessel();
+        let c = 1.72;
+        let floor = v.depth + v.radius + v.wall + 2e-3;
+        let delta = 2e-3 / 1.5 - (c - 1.0) * v.radius;
+        assert!(delta < -2e-3);
+        for u in [0.0, 0.002, 0.004, 0.0049] {
+            let w = VesselWarp::new(&v, u, c).with_floor(floor);
+            let (centre, h) = v.chord(u, 0.0);
+            for t in [-1.0, -0.5, 0.0, 0.7, 1.0] {
+                let y = w.apply(centre + t * h);
+                assert!((y - (v.depth + delta + c * t * h)).abs() < 1e-15, "u = {u}");
+            }
+            assert_eq!(w.apply(floor), floor);
+            assert_eq!(w.apply(floor + 1e-3), floor + 1e-3);
+            let mut last = f64::NEG_INFINITY;
+            for i in 0..30_000 {
+                let y = w.apply(0.005 + i as f64 * 1e-6);
+                assert!(y - last >= 1e-6 / 3.0 - 1e-9, "u = {u}: slope at {i}");
                 last = y;
             }
         }

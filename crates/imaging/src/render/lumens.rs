@@ -101,7 +101,8 @@ impl Renderer {
         let ratio = a.lumen_ratio(i, p, input.time) * self.distension_of(i);
         let shape = lumen_shape(v, ratio, blood_fraction(a, i), side_caps(a, i));
         let c = shape.height_ratio;
-        let warp = VesselWarp::new(v, v.lateral, compensated_ratio(c, s, def.bone_depth));
+        let warp = VesselWarp::new(v, v.lateral, compensated_ratio(c, s, def.bone_depth))
+            .with_floor(a.femur_top());
         let (mid, h) = v.chord(v.lateral, 0.0);
         let top = column_depth(s, def.bone_depth, warp.apply(mid - h) + by) - face;
         let bottom = column_depth(s, def.bone_depth, warp.apply(mid + h) + by) - face;

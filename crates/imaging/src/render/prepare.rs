@@ -13,6 +13,17 @@ use crate::warp::{compensated_ratio, VesselWarp, MAX_VESSELS};
 use crate::widen::{decay_lengths, LumenShape};
 
 impl Renderer {
+    /// The image depth (m below the probe face) at which the last frame
+    /// ([`Renderer::render`]) drew the tissue point at depth `depth` (m
+    /// below the undeformed skin, anatomy frame) in image column `j`: the
+    /// column's compression ([`crate::deformation`]) after the vessels'
+    /// warps ([`crate::warp`]), before a widening lumen's lateral map
+    /// ([`crate::lateral_map`]). Before any frame, the undeformed depth.
+    pub fn drawn_depth(&self, j: usize, depth: f64) -> f64 {
+        let b = (j + self.field.halo).min(self.bin_u.len() - 1);
+        image_depth(&self.geometry, self.surface[b], &self.warps[b], depth)
+    }
+
     /// Stage 1: frame geometry, per-column skin displacement and warps.
     pub(super) fn prepare(&mut self, input: &FrameInput) -> Result<(), ImagingError> {
         let def = input.deformation;
