@@ -6,24 +6,10 @@
 //! built-in scenario's whole-leg mesh (the lean-male femur, groin to knee,
 //! 48 × 27 nodes) with 1 ms steps through a press, a hold and a slide.
 
-use echothigh_anatomy::Site;
+use crate::site_probe::probe;
 use echothigh_model::Vec3;
 use echothigh_runtime::physics_side::PhysicsSide;
 use echothigh_runtime::scenario::Scenario;
-use echothigh_transport::ProbeMsg;
-
-/// The probe message over the fv-mid site of `physics`'s leg, its face
-/// `depth` (m) inside the rest skin, moved `slide` (m) along the leg
-/// (towards the knee).
-fn probe(physics: &PhysicsSide, depth: f64, slide: f64) -> ProbeMsg {
-    let leg = physics.model().mesh().leg().expect("the whole-leg mesh");
-    let site = leg.anatomy().site_pose(Site::FvMid);
-    let target = leg
-        .hand_target(site.s + slide, site.theta, depth, 0.0)
-        .unwrap();
-    let q = target.orientation;
-    ProbeMsg::new(0.0, target.position.into(), [q.w, q.i, q.j, q.k], 0)
-}
 
 #[test]
 fn the_force_only_step_is_the_full_step_without_its_queries() {

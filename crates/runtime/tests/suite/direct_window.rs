@@ -10,23 +10,10 @@
 //! once panicked when the contact's face samples outnumbered the patch's
 //! nodes (its rank-one terms overflowed into the side matrix).
 
-use echothigh_anatomy::Site;
+use crate::site_probe::probe;
 use echothigh_runtime::live::CouplingMode;
 use echothigh_runtime::physics_side::PhysicsSide;
 use echothigh_runtime::scenario::Scenario;
-use echothigh_transport::ProbeMsg;
-
-/// The probe over the fv-mid site, its face `depth` (m) inside the rest
-/// skin, moved `slide` (m) along the leg.
-fn probe(physics: &PhysicsSide, depth: f64, slide: f64) -> ProbeMsg {
-    let leg = physics.model().mesh().leg().expect("the whole-leg mesh");
-    let site = leg.anatomy().site_pose(Site::FvMid);
-    let target = leg
-        .hand_target(site.s + slide, site.theta, depth, 0.0)
-        .unwrap();
-    let q = target.orientation;
-    ProbeMsg::new(0.0, target.position.into(), [q.w, q.i, q.j, q.k], 0)
-}
 
 /// Largest node distance between two position sets (m).
 fn largest_gap(a: &[echothigh_model::Vec3], b: &[echothigh_model::Vec3]) -> f64 {

@@ -30,6 +30,7 @@ mod scenario_fuzz;
 mod scenario_ranges;
 mod section_follow;
 mod sections_everywhere;
+mod site_probe;
 mod slide;
 mod tail_motion;
 
