@@ -94,3 +94,38 @@ fn the_direct_window_renders_the_full_models_force_at_50_mm() {
 fn the_direct_window_renders_the_full_models_force_at_20_mm() {
     windowed_force_follows_the_full_model(0.02);
 }
+
+/// `run --mode direct` integrates the window by default, and only there:
+/// the buffer and hold modes' physics (100 Hz, off the haptic thread) and a
+/// scenario that asks for the whole mesh step every node.
+#[test]
+fn direct_mode_integrates_the_window_by_default() {
+    let mut s = Scenario::builtin().unwrap();
+    assert!(s.coupling.direct_window, "the default is the window");
+    assert!(
+        !s.integrator.window.enabled,
+        "the window is off for the other modes"
+    );
+    for (mode, whole_mesh, windowed) in [
+        (CouplingMode::Buffer, false, false),
+        (CouplingMode::Hold, false, false),
+        (CouplingMode::Direct, false, true),
+        (CouplingMode::Direct, true, false),
+    ] {
+        s.coupling.mode = mode;
+        s.coupling.direct_window = !whole_mesh;
+        assert_eq!(
+            s.model_config().integrator.window.enabled,
+            windowed,
+            "{mode:?}, direct_window {}",
+            s.coupling.direct_window
+        );
+    }
+    s.coupling.mode = CouplingMode::Direct;
+    s.coupling.direct_window = true;
+    let physics = PhysicsSide::new(&s).unwrap();
+    assert!(
+        physics.model().window().is_some(),
+        "the physics side builds the window"
+    );
+}
