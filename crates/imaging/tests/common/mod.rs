@@ -66,3 +66,85 @@ pub fn mean_db(cfg: &ImagingConfig, frame: &[u8], u: (f64, f64), d: (f64, f64)) 
     assert!(n > 0, "empty region");
     10.0 * (sum / n as f64).log10()
 }
+
+/// The dark region connected to a lumen's reported centre
+/// ([`dark_region`]).
+pub struct DarkRegion {
+    /// Pixels in the region.
+    pub pixels: usize,
+    /// Its extent `(width, height)` (m) over columns and rows; `None` if the
+    /// centre is not dark.
+    pub extent: Option<(f64, f64)>,
+}
+
+impl DarkRegion {
+    /// The region's area (m²).
+    pub fn area(&self, cfg: &ImagingConfig) -> f64 {
+        self.pixels as f64 * cfg.pixel_width() * cfg.pixel_depth()
+    }
+}
+
+/// The dark region connected to `l`'s centre: the frame's intensity
+/// averaged over 5 × 5 pixels, thresholded `threshold_db` below the muscle
+/// beside the vessels at the same depth (lateral 12–19 mm, ± 3 mm), and
+/// flood-filled from the centre inside a box of half-size `span` (m) about
+/// it.
+pub fn dark_region(
+    cfg: &ImagingConfig,
+    frame: &[u8],
+    l: &Lumen,
+    span: f64,
+    threshold_db: f64,
+) -> DarkRegion {
+    let (w, h) = (cfg.columns, cfg.rows);
+    let muscle = mean_db(cfg, frame, (12e-3, 19e-3), (l.depth - 3e-3, l.depth + 3e-3));
+    let limit = 10f64.powf((muscle - threshold_db) / 10.0);
+    let smooth = |j: usize, i: usize| {
+        let mut s = 0.0;
+        let mut n = 0.0;
+        for ii in i.saturating_sub(2)..(i + 3).min(h) {
+            for jj in j.saturating_sub(2)..(j + 3).min(w) {
+                s += intensity(frame[ii * w + jj], cfg.dynamic_range);
+                n += 1.0;
+            }
+        }
+        s / n
+    };
+    let (cols, rows) = region(
+        cfg,
+        (l.lateral - span, l.lateral + span),
+        (l.depth - span, l.depth + span),
+    );
+    let seed = (
+        ((l.lateral + 0.5 * cfg.width) / cfg.pixel_width()) as usize,
+        (l.depth / cfg.pixel_depth()) as usize,
+    );
+    let mut seen = vec![false; w * h];
+    let mut stack = vec![seed];
+    let (mut j0, mut j1, mut i0, mut i1) = (usize::MAX, 0, usize::MAX, 0);
+    let mut pixels = 0usize;
+    while let Some((j, i)) = stack.pop() {
+        if !cols.contains(&j) || !rows.contains(&i) || seen[i * w + j] {
+            continue;
+        }
+        seen[i * w + j] = true;
+        if smooth(j, i) >= limit {
+            continue;
+        }
+        pixels += 1;
+        (j0, j1, i0, i1) = (j0.min(j), j1.max(j), i0.min(i), i1.max(i));
+        stack.extend([
+            (j + 1, i),
+            (j.wrapping_sub(1), i),
+            (j, i + 1),
+            (j, i.wrapping_sub(1)),
+        ]);
+    }
+    let extent = (j0 != usize::MAX).then(|| {
+        (
+            (j1 - j0 + 1) as f64 * cfg.pixel_width(),
+            (i1 - i0 + 1) as f64 * cfg.pixel_depth(),
+        )
+    });
+    DarkRegion { pixels, extent }
+}

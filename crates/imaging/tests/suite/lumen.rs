@@ -52,10 +52,9 @@ fn model_lumen_area_versus_force() {
     }
 }
 
-/// Area (m²) of the dark region connected to `(lateral, depth)`: the frame's
-/// intensity is averaged over 5 × 5 pixels, thresholded `threshold_db` below
-/// the muscle level measured beside the vessels at the same depth, and
-/// flood-filled from the seed inside a box of the vessel's rest size + 2 mm.
+/// Area (m²) of the dark region connected to the lumen's centre
+/// ([`dark_region`], `threshold_db` below the muscle) inside a box of the
+/// vessel's rest size + 2 mm.
 fn segmented_area(
     cfg: &ImagingConfig,
     frame: &[u8],
@@ -63,50 +62,7 @@ fn segmented_area(
     rest_half: f64,
     threshold_db: f64,
 ) -> f64 {
-    let (w, h) = (cfg.columns, cfg.rows);
-    let muscle = mean_db(cfg, frame, (12e-3, 19e-3), (l.depth - 3e-3, l.depth + 3e-3));
-    let limit = 10f64.powf((muscle - threshold_db) / 10.0);
-    let smooth = |j: usize, i: usize| {
-        let mut s = 0.0;
-        let mut n = 0.0;
-        for ii in i.saturating_sub(2)..(i + 3).min(h) {
-            for jj in j.saturating_sub(2)..(j + 3).min(w) {
-                s += intensity(frame[ii * w + jj], cfg.dynamic_range);
-                n += 1.0;
-            }
-        }
-        s / n
-    };
-    let span = rest_half + 2e-3;
-    let (cols, rows) = region(
-        cfg,
-        (l.lateral - span, l.lateral + span),
-        (l.depth - span, l.depth + span),
-    );
-    let seed = (
-        ((l.lateral + 0.5 * cfg.width) / cfg.pixel_width()) as usize,
-        (l.depth / cfg.pixel_depth()) as usize,
-    );
-    let mut seen = vec![false; w * h];
-    let mut stack = vec![seed];
-    let mut count = 0usize;
-    while let Some((j, i)) = stack.pop() {
-        if !cols.contains(&j) || !rows.contains(&i) || seen[i * w + j] {
-            continue;
-        }
-        seen[i * w + j] = true;
-        if smooth(j, i) >= limit {
-            continue;
-        }
-        count += 1;
-        stack.extend([
-            (j + 1, i),
-            (j.wrapping_sub(1), i),
-            (j, i + 1),
-            (j, i.wrapping_sub(1)),
-        ]);
-    }
-    count as f64 * cfg.pixel_width() * cfg.pixel_depth()
+    dark_region(cfg, frame, l, rest_half + 2e-3, threshold_db).area(cfg)
 }
 
 #[test]

@@ -28,61 +28,12 @@ fn plain_muscle() -> ImagingConfig {
 }
 
 /// Extent `(width, height)` (m) of the dark region connected to the
-/// lumen's reported centre: the frame's intensity averaged over 5 × 5
-/// pixels, thresholded 10 dB below the muscle beside the vessels at the
-/// same depth (the threshold of `lumen.rs`), flood-filled inside a box of
+/// lumen's reported centre ([`dark_region`]: thresholded 10 dB below the
+/// muscle beside the vessels, the threshold of `lumen.rs`) inside a box of
 /// the vessel's rest half-width (or its widened one, if larger) + 2 mm.
 /// `None` if the centre is not dark.
 fn dark_extent(cfg: &ImagingConfig, frame: &[u8], l: &Lumen, rest_half: f64) -> Option<(f64, f64)> {
-    let (w, h) = (cfg.columns, cfg.rows);
-    let muscle = mean_db(cfg, frame, (12e-3, 19e-3), (l.depth - 3e-3, l.depth + 3e-3));
-    let limit = 10f64.powf((muscle - 10.0) / 10.0);
-    let smooth = |j: usize, i: usize| {
-        let mut s = 0.0;
-        let mut n = 0.0;
-        for ii in i.saturating_sub(2)..(i + 3).min(h) {
-            for jj in j.saturating_sub(2)..(j + 3).min(w) {
-                s += intensity(frame[ii * w + jj], cfg.dynamic_range);
-                n += 1.0;
-            }
-        }
-        s / n
-    };
-    let span = rest_half.max(l.half_width) + 2e-3;
-    let (cols, rows) = region(
-        cfg,
-        (l.lateral - span, l.lateral + span),
-        (l.depth - span, l.depth + span),
-    );
-    let seed = (
-        ((l.lateral + 0.5 * cfg.width) / cfg.pixel_width()) as usize,
-        (l.depth / cfg.pixel_depth()) as usize,
-    );
-    let mut seen = vec![false; w * h];
-    let mut stack = vec![seed];
-    let (mut j0, mut j1, mut i0, mut i1) = (usize::MAX, 0, usize::MAX, 0);
-    while let Some((j, i)) = stack.pop() {
-        if !cols.contains(&j) || !rows.contains(&i) || seen[i * w + j] {
-            continue;
-        }
-        seen[i * w + j] = true;
-        if smooth(j, i) >= limit {
-            continue;
-        }
-        (j0, j1, i0, i1) = (j0.min(j), j1.max(j), i0.min(i), i1.max(i));
-        stack.extend([
-            (j + 1, i),
-            (j.wrapping_sub(1), i),
-            (j, i + 1),
-            (j, i.wrapping_sub(1)),
-        ]);
-    }
-    (j0 != usize::MAX).then(|| {
-        (
-            (j1 - j0 + 1) as f64 * cfg.pixel_width(),
-            (i1 - i0 + 1) as f64 * cfg.pixel_depth(),
-        )
-    })
+    dark_region(cfg, frame, l, rest_half.max(l.half_width) + 2e-3, 10.0).extent
 }
 
 /// Forces (N) of a slow press, 0 to 20 N.
