@@ -458,9 +458,10 @@ impl Renderer {
         self.prepare(input)?;
         self.times.prepare = lap.lap();
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2 (checked just above), the only
-            // requirement of `stages_avx2`.
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU has AVX2 and FMA (checked just above), the
+            // only requirements of `stages_avx2`.
             unsafe { self.stages_avx2(out, &mut lap) };
             return Ok(());
         }
@@ -468,11 +469,12 @@ impl Renderer {
         Ok(())
     }
 
-    /// [`Renderer::stages`] compiled for AVX2 (8 floats per instruction,
-    /// and `floor`/`round` as single instructions): the same operations in
-    /// the same order, hence the same floats (no FMA contraction).
+    /// [`Renderer::stages`] compiled for AVX2 and FMA (8 floats per
+    /// instruction, `floor`/`round` and the convolution's `mul_add` as single
+    /// instructions): the same operations in the same order, hence the same
+    /// floats (Rust contracts no other product and sum into an FMA).
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
+    #[target_feature(enable = "avx2,fma")]
     fn stages_avx2(&mut self, out: &mut [u8], lap: &mut Lap) {
         self.stages::<true>(out, lap);
     }
@@ -736,7 +738,9 @@ mod tests {
     /// for the clustering of levels about a few values.
     #[test]
     fn avx2_and_scalar_stages_give_the_same_frame() {
-        if !std::arch::is_x86_feature_detected!("avx2") {
+        if !std::arch::is_x86_feature_detected!("avx2")
+            || !std::arch::is_x86_feature_detected!("fma")
+        {
             return;
         }
         let cfg = ImagingConfig {

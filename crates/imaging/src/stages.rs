@@ -212,8 +212,7 @@ fn add_taps_avx2(out: &mut [[f32; 2]], w: &[[f32; 2]], c: [f32; 2]) {
 /// Output column `j` of the lateral convolution with the depth-dependent
 /// lateral profile: `out[i] = Σ_k h_i[k] rf[j + H + k][i]` over the padded
 /// bins (`H` the halo), unpadded rows, each block of rows over its own
-/// half-width. A full block accumulates in registers over all its offsets
-/// (`k` increasing from a zero sum, as a row-by-row sum: the same floats).
+/// half-width ([`convolve_tail`] block by block).
 #[inline(always)]
 pub(crate) fn convolve_column(
     t: &PsfTables,
@@ -224,36 +223,8 @@ pub(crate) fn convolve_column(
     out: &mut [[f32; 2]],
 ) {
     let rows = out.len();
-    let hh = t.lat_half as i64;
     for (blk, chunk) in out.chunks_mut(BLOCK_ROWS).enumerate() {
-        let h = t.block_half[blk] as i64;
-        let i0 = blk * BLOCK_ROWS;
-        let n = chunk.len();
-        let weights = |k: i64| &t.lateral[(k + hh) as usize * rows + i0..][..n];
-        let source = |k: i64| {
-            let start = (j as i64 + hh + k) as usize * padded_rows + pad + i0;
-            &rf[start..start + n]
-        };
-        if let Ok(block) = <&mut [[f32; 2]; BLOCK_ROWS]>::try_from(&mut *chunk) {
-            let mut acc = [[0.0f32; 2]; BLOCK_ROWS];
-            for k in -h..=h {
-                let w: &[f32; BLOCK_ROWS] = weights(k).try_into().expect("full block");
-                let s: &[[f32; 2]; BLOCK_ROWS] = source(k).try_into().expect("full block");
-                for m in 0..BLOCK_ROWS {
-                    acc[m][0] += w[m] * s[m][0];
-                    acc[m][1] += w[m] * s[m][1];
-                }
-            }
-            *block = acc;
-        } else {
-            chunk.fill([0.0, 0.0]);
-            for k in -h..=h {
-                for ((o, s), &wk) in chunk.iter_mut().zip(source(k)).zip(weights(k)) {
-                    o[0] += wk * s[0];
-                    o[1] += wk * s[1];
-                }
-            }
-        }
+        convolve_tail(t, rf, padded_rows, pad, rows, blk, j, chunk);
     }
 }
 
@@ -359,8 +330,12 @@ fn prefetch_rows(rf: &[[f32; 2]], start: usize) {
     }
 }
 
-/// The partial block `blk` (rows `blk · 16 ..`, `out.len()` of them) of
-/// output column `j`, as [`convolve_column`] computes it.
+/// Block `blk` (rows `blk · 16 ..`, `out.len()` of them) of output column
+/// `j`. The profile is even (`h_i[−k] = h_i[k]`, [`PsfTables::lateral`]), so
+/// the two sources at `±k` are added first and weighted once, in order:
+/// `acc ← fma(h[k], s[k] + s[−k], acc)` for `k = −h … −1` from a zero sum,
+/// then `fma(h[0], s[0], acc)`: half the products of the plain sum, each
+/// term rounded once.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn convolve_tail(
@@ -377,27 +352,40 @@ fn convolve_tail(
     let h = t.block_half[blk] as i64;
     let i0 = blk * BLOCK_ROWS;
     let n = out.len();
-    out.fill([0.0, 0.0]);
-    for k in -h..=h {
-        let w = &t.lateral[(k + hh) as usize * rows + i0..][..n];
+    let weights = |k: i64| &t.lateral[(k + hh) as usize * rows + i0..][..n];
+    let source = |k: i64| {
         let start = (j as i64 + hh + k) as usize * padded_rows + pad + i0;
-        for ((o, s), &wk) in out.iter_mut().zip(&rf[start..start + n]).zip(w) {
-            o[0] += wk * s[0];
-            o[1] += wk * s[1];
+        &rf[start..start + n]
+    };
+    out.fill([0.0, 0.0]);
+    for k in -h..0 {
+        for (((o, &wk), a), b) in out
+            .iter_mut()
+            .zip(weights(k))
+            .zip(source(k))
+            .zip(source(-k))
+        {
+            o[0] = wk.mul_add(a[0] + b[0], o[0]);
+            o[1] = wk.mul_add(a[1] + b[1], o[1]);
         }
+    }
+    for ((o, &wk), a) in out.iter_mut().zip(weights(0)).zip(source(0)) {
+        o[0] = wk.mul_add(a[0], o[0]);
+        o[1] = wk.mul_add(a[1], o[1]);
     }
 }
 
-/// One full block of [`convolve_column`] with AVX2 for one output column,
-/// `out_a`, and the next one, `out_b` if any: `out[m] = Σ_k w_k[m]
-/// s_k[m]` over the `n` offsets, `w_k` at `w[k · w_stride..]` (weights as
-/// pairs, [`PsfTables::lateral_pairs`]) and `s_k` at `s[k · s_stride..]`
-/// for `out_a`, one source column (`s_stride`) further for `out_b`, `k`
-/// increasing from a zero sum. Sixteen complex rows are four registers of
-/// interleaved `(re, im)` pairs, multiplied and added (no FMA contraction)
-/// as the scalar loop does per float: the same floats.
+/// One full block of [`convolve_column`] with AVX2 and FMA for one output
+/// column, `out_a`, and the next one, `out_b` if any, over the `n = 2h + 1`
+/// offsets: weights `w_m` at `w[m · w_stride..]` (as pairs,
+/// [`PsfTables::lateral_pairs`]), sources `s_m` at `s[m · s_stride..]` for
+/// `out_a`, one source column (`s_stride`) further for `out_b`. As
+/// [`convolve_tail`]: `acc ← fma(w_m, s_m + s_{n−1−m}, acc)` for `m < h`
+/// from a zero sum, then `fma(w_h, s_h, acc)` (the profile is even:
+/// `w_m = w_{n−1−m}`). Sixteen complex rows are four registers of
+/// interleaved `(re, im)` pairs: the scalar loop's floats.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,fma")]
 fn convolve_block_avx2(
     w: &[[f32; 2]],
     w_stride: usize,
@@ -410,40 +398,42 @@ fn convolve_block_avx2(
     use std::arch::x86_64::*;
     const _: () = assert!(BLOCK_ROWS == 16);
     let extra = usize::from(out_b.is_some());
-    assert!(n >= 1 && w.len() >= (n - 1) * w_stride + BLOCK_ROWS);
+    assert!(n % 2 == 1 && w.len() >= (n - 1) * w_stride + BLOCK_ROWS);
     assert!(s.len() >= (n - 1 + extra) * s_stride + BLOCK_ROWS);
+    let h = n / 2;
     let mut acc = [_mm256_setzero_ps(); 4];
     let mut acc_b = [_mm256_setzero_ps(); 4];
     let (wp, sp) = (w.as_ptr().cast::<f32>(), s.as_ptr().cast::<f32>());
-    if extra == 1 {
-        for k in 0..n {
-            let (wk, sk) = (2 * k * w_stride, 2 * k * s_stride);
-            for q in 0..4 {
-                // SAFETY: 8 floats (4 rows) within `w` and `s` (asserted
-                // above, the next column included); unaligned loads.
-                let (wv, sa, sb) = unsafe {
-                    (
-                        _mm256_loadu_ps(wp.add(wk + 8 * q)),
-                        _mm256_loadu_ps(sp.add(sk + 8 * q)),
-                        _mm256_loadu_ps(sp.add(sk + 2 * s_stride + 8 * q)),
-                    )
-                };
-                acc[q] = _mm256_add_ps(acc[q], _mm256_mul_ps(wv, sa));
-                acc_b[q] = _mm256_add_ps(acc_b[q], _mm256_mul_ps(wv, sb));
-            }
-        }
-    } else {
-        for k in 0..n {
-            let (wk, sk) = (2 * k * w_stride, 2 * k * s_stride);
-            for (q, a) in acc.iter_mut().enumerate() {
-                // SAFETY: as above.
-                let (wv, sv) = unsafe {
-                    (
-                        _mm256_loadu_ps(wp.add(wk + 8 * q)),
-                        _mm256_loadu_ps(sp.add(sk + 8 * q)),
-                    )
-                };
-                *a = _mm256_add_ps(*a, _mm256_mul_ps(wv, sv));
+    // SAFETY (every load below): 8 floats (4 rows) within `w` and `s`
+    // (asserted above, the next column included when `extra`); unaligned.
+    let load = |p: *const f32, at: usize| unsafe { _mm256_loadu_ps(p.add(at)) };
+    for m in 0..=h {
+        let (wk, lo, hi) = (
+            2 * m * w_stride,
+            2 * m * s_stride,
+            2 * (n - 1 - m) * s_stride,
+        );
+        for q in 0..4 {
+            let wv = load(wp, wk + 8 * q);
+            let (a, b) = if m < h {
+                (
+                    _mm256_add_ps(load(sp, lo + 8 * q), load(sp, hi + 8 * q)),
+                    (extra == 1).then(|| {
+                        _mm256_add_ps(
+                            load(sp, lo + 2 * s_stride + 8 * q),
+                            load(sp, hi + 2 * s_stride + 8 * q),
+                        )
+                    }),
+                )
+            } else {
+                (
+                    load(sp, lo + 8 * q),
+                    (extra == 1).then(|| load(sp, lo + 2 * s_stride + 8 * q)),
+                )
+            };
+            acc[q] = _mm256_fmadd_ps(wv, a, acc[q]);
+            if let Some(b) = b {
+                acc_b[q] = _mm256_fmadd_ps(wv, b, acc_b[q]);
             }
         }
     }
