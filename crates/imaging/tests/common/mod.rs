@@ -84,6 +84,28 @@ impl DarkRegion {
     }
 }
 
+/// The linear intensity `threshold_db` below the muscle beside the vessels
+/// at `l`'s depth (lateral 12–19 mm, ± 3 mm): a lumen's dark threshold.
+pub fn dark_limit(cfg: &ImagingConfig, frame: &[u8], l: &Lumen, threshold_db: f64) -> f64 {
+    let muscle = mean_db(cfg, frame, (12e-3, 19e-3), (l.depth - 3e-3, l.depth + 3e-3));
+    10f64.powf((muscle - threshold_db) / 10.0)
+}
+
+/// The frame's linear intensity averaged over the 5 × 5 pixels about
+/// `(column j, row i)` (fewer at the edges).
+pub fn smoothed_intensity(cfg: &ImagingConfig, frame: &[u8], j: usize, i: usize) -> f64 {
+    let (w, h) = (cfg.columns, cfg.rows);
+    let mut s = 0.0;
+    let mut n = 0.0;
+    for ii in i.saturating_sub(2)..(i + 3).min(h) {
+        for jj in j.saturating_sub(2)..(j + 3).min(w) {
+            s += intensity(frame[ii * w + jj], cfg.dynamic_range);
+            n += 1.0;
+        }
+    }
+    s / n
+}
+
 /// The dark region connected to `l`'s centre: the frame's intensity
 /// averaged over 5 × 5 pixels, thresholded `threshold_db` below the muscle
 /// beside the vessels at the same depth (lateral 12–19 mm, ± 3 mm), and
@@ -97,19 +119,8 @@ pub fn dark_region(
     threshold_db: f64,
 ) -> DarkRegion {
     let (w, h) = (cfg.columns, cfg.rows);
-    let muscle = mean_db(cfg, frame, (12e-3, 19e-3), (l.depth - 3e-3, l.depth + 3e-3));
-    let limit = 10f64.powf((muscle - threshold_db) / 10.0);
-    let smooth = |j: usize, i: usize| {
-        let mut s = 0.0;
-        let mut n = 0.0;
-        for ii in i.saturating_sub(2)..(i + 3).min(h) {
-            for jj in j.saturating_sub(2)..(j + 3).min(w) {
-                s += intensity(frame[ii * w + jj], cfg.dynamic_range);
-                n += 1.0;
-            }
-        }
-        s / n
-    };
+    let limit = dark_limit(cfg, frame, l, threshold_db);
+    let smooth = |j: usize, i: usize| smoothed_intensity(cfg, frame, j, i);
     let (cols, rows) = region(
         cfg,
         (l.lateral - span, l.lateral + span),

@@ -200,19 +200,8 @@ fn artery_stays_round_below_its_cue_then_ovalises() {
 /// moved), which is not the lumen's shape.
 fn centre_extent(cfg: &ImagingConfig, frame: &[u8], l: &Lumen) -> (f64, f64) {
     let (w, h) = (cfg.columns, cfg.rows);
-    let muscle = mean_db(cfg, frame, (12e-3, 19e-3), (l.depth - 3e-3, l.depth + 3e-3));
-    let limit = 10f64.powf((muscle - 10.0) / 10.0);
-    let dark = |j: usize, i: usize| {
-        let mut s = 0.0;
-        let mut n = 0.0;
-        for ii in i.saturating_sub(2)..(i + 3).min(h) {
-            for jj in j.saturating_sub(2)..(j + 3).min(w) {
-                s += intensity(frame[ii * w + jj], cfg.dynamic_range);
-                n += 1.0;
-            }
-        }
-        s / n < limit
-    };
+    let limit = dark_limit(cfg, frame, l, 10.0);
+    let dark = |j: usize, i: usize| smoothed_intensity(cfg, frame, j, i) < limit;
     let j = ((l.lateral + 0.5 * cfg.width) / cfg.pixel_width()) as usize;
     let i = (l.depth / cfg.pixel_depth()) as usize;
     let run = |step: &dyn Fn(usize, isize) -> Option<(usize, usize)>| {
