@@ -82,7 +82,8 @@ fn exp_reduce(x: __m256d) -> (__m128, __m128i) {
 }
 
 /// `e^x` of eight lanes given as two f64 registers (`lo`: lanes 0–3),
-/// as f32; `x` clamped to `[−87, 88]` (`e^−87 = 1.6·10⁻³⁸`, under which a
+/// as f32: the amplitude factor of a round-trip loss `x` (Np, from
+/// `stages::column_loss`); `x` clamped to `[−87, 88]` (`e^−87 = 1.6·10⁻³⁸`, under which a
 /// pixel's echo is under the noise all the same). Relative error
 /// `< 5·10⁻⁷` (module doc; measured in the tests).
 ///
@@ -108,7 +109,8 @@ pub(crate) fn exp_8(lo: __m256d, hi: __m256d) -> __m256 {
     _mm256_mul_ps(y, _mm256_castsi256_ps(two_n))
 }
 
-/// `log₂ s` of eight positive normal f32 lanes. Within two f32 ulps of
+/// `log₂ s` of eight positive normal f32 lanes (`s` an echo's power,
+/// envelope units squared, for the log compression). Within two f32 ulps of
 /// libm's (module doc; measured in the tests).
 ///
 /// # Safety

@@ -20,15 +20,26 @@ pub fn press(r: &Renderer, indentation: f64) -> SectionDeformation {
     SectionDeformation::flat_press(indentation, r.config().probe_width, 1.5e-3, bone).unwrap()
 }
 
+/// The frame input of the section `d` under `force` (N) on the probe face
+/// of `cfg` at time `time` (s), the probe centred (no pan).
+pub fn press_input<'a>(
+    cfg: &ImagingConfig,
+    d: &'a SectionDeformation,
+    force: f64,
+    time: f64,
+) -> FrameInput<'a> {
+    FrameInput {
+        deformation: d,
+        probe_pressure: force / cfg.probe_area(),
+        time,
+        lateral_offset: 0.0,
+    }
+}
+
 /// Renders `r` under `force` (N) at time `time` (s); returns the frame and the lumens.
 pub fn render_force(r: &mut Renderer, force: f64, time: f64) -> (Vec<u8>, LumenReport) {
     let d = press(r, indentation(force));
-    let input = FrameInput {
-        deformation: &d,
-        probe_pressure: force / r.config().probe_area(),
-        time,
-        lateral_offset: 0.0,
-    };
+    let input = press_input(r.config(), &d, force, time);
     let frame = r.render(&input).unwrap();
     let lumens = r.lumens(&input).unwrap().unwrap();
     (frame, lumens)

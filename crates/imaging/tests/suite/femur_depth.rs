@@ -52,12 +52,7 @@ fn the_cortex_rises_by_the_compression_above_it_and_shadows_below() {
         let (cortex, top) = (a.config().cortex_thickness, a.femur_top());
         for (force, indentation) in PRESSES {
             let d = press(&r, indentation);
-            let input = FrameInput {
-                deformation: &d,
-                probe_pressure: force / cfg.probe_area(),
-                time: 0.0,
-                lateral_offset: 0.0,
-            };
+            let input = press_input(&cfg, &d, force, 0.0);
             let frame = r.render(&input).unwrap();
             let face = d.face_depth(0.5 * cfg.probe_width);
             let mut worst: f64 = 0.0;

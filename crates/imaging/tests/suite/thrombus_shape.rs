@@ -87,12 +87,7 @@ fn a_thrombosed_vein_keeps_a_convex_shape_under_the_probe() {
         let mut rest_aspect = None;
         for (force, indentation) in PRESSES {
             let d = press(&r, indentation);
-            let input = FrameInput {
-                deformation: &d,
-                probe_pressure: force / cfg.probe_area(),
-                time: 0.0,
-                lateral_offset: 0.0,
-            };
+            let input = press_input(&cfg, &d, force, 0.0);
             r.render(&input).unwrap();
             let (w25, w75, w, h) = shape(&drawn_lumen(&r), dx);
             let aspect = w / h;
